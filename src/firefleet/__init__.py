@@ -1,0 +1,22 @@
+"""firefleet: teams of intelligent mobile robots for firefighting and disaster response.
+
+The public surface is small; the subpackages hold the rest:
+:mod:`firefleet.models` (plants), :mod:`firefleet.control` (controllers),
+:mod:`firefleet.scenarios` (experiments), :mod:`firefleet.sim` (the simulator).
+"""
+
+from firefleet.errors import InputError
+from firefleet.scenarios import Scenario, builtin_names, load_scenario
+from firefleet.sim import SimResult, compute_metrics, simulate
+
+__all__ = [
+    "InputError",
+    "Scenario",
+    "SimResult",
+    "builtin_names",
+    "compute_metrics",
+    "load_scenario",
+    "simulate",
+]
+
+__version__ = "0.1.0"

@@ -1,0 +1,167 @@
+"""Differential-drive and unicycle kinematics (deliverable section 2.2, eqs. 1-4).
+
+Team poses are ``(N, 3)`` arrays of x [m], y [m], theta [rad]; wheel speeds are
+``(N, 2)`` arrays of right, left wheel angular speed [rad/s].
+
+The steps integrate the kinematics exactly for inputs held over the step (the robot
+moves on a circular arc, or a straight line when omega = 0), so a circle's radius is
+v / omega to rounding error at any step size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from firefleet.errors import InputError, as_float_array
+
+__all__ = [
+    "RobotGeometry",
+    "body_to_wheels",
+    "diff_drive_step",
+    "unicycle_step",
+    "wheels_to_body",
+    "wrap_angle",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class RobotGeometry:
+    """Geometry of a differential-drive robot (deliverable Table 2).
+
+    Attributes
+    ----------
+    wheel_radius_m : float
+        Wheel radius r [m].
+    axle_length_m : float
+        Distance between the wheels L [m].
+    """
+
+    wheel_radius_m: float = 0.045
+    axle_length_m: float = 0.2
+
+    def __post_init__(self) -> None:
+        for name in ("wheel_radius_m", "axle_length_m"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise InputError(f"robot.{name} must be > 0, got {value}")
+
+
+def wrap_angle(angle_rad: ArrayLike) -> FloatArray:
+    """Wrap angles to [-pi, pi) [rad]."""
+    a = np.asarray(angle_rad, dtype=np.float64)
+    return np.asarray((a + np.pi) % (2.0 * np.pi) - np.pi, dtype=np.float64)
+
+
+def body_to_wheels(v_m_s: ArrayLike, omega_rad_s: ArrayLike, geometry: RobotGeometry) -> FloatArray:
+    """Wheel angular speeds from body velocities (eqs. 3, 4 and v = r omega_wheel).
+
+    Parameters
+    ----------
+    v_m_s : array_like, shape (N,)
+        Linear speed [m/s].
+    omega_rad_s : array_like, shape (N,)
+        Angular speed [rad/s].
+    geometry : RobotGeometry
+
+    Returns
+    -------
+    ndarray, shape (N, 2)
+        Right, left wheel angular speeds [rad/s]:
+        ``(2 v +- omega L) / (2 r)``.
+    """
+    v = np.asarray(v_m_s, dtype=np.float64)
+    w = np.asarray(omega_rad_s, dtype=np.float64)
+    r, L = geometry.wheel_radius_m, geometry.axle_length_m
+    return np.stack([(2.0 * v + w * L) / (2.0 * r), (2.0 * v - w * L) / (2.0 * r)], axis=-1)
+
+
+def wheels_to_body(wheel_rad_s: ArrayLike, geometry: RobotGeometry) -> tuple[FloatArray, FloatArray]:
+    """Body velocities from wheel angular speeds (eq. 1): the inverse of eqs. 3-4.
+
+    Parameters
+    ----------
+    wheel_rad_s : array_like, shape (N, 2)
+        Right, left wheel angular speeds [rad/s].
+    geometry : RobotGeometry
+
+    Returns
+    -------
+    v_m_s, omega_rad_s : ndarray, shape (N,)
+        ``v = r (w_R + w_L) / 2`` and ``omega = r (w_R - w_L) / L``.
+    """
+    w = as_float_array(wheel_rad_s, "wheel_rad_s", (None, 2))
+    r, L = geometry.wheel_radius_m, geometry.axle_length_m
+    return r * (w[:, 0] + w[:, 1]) / 2.0, r * (w[:, 0] - w[:, 1]) / L
+
+
+def _arc_step(pose: FloatArray, ds: FloatArray, dtheta: FloatArray) -> FloatArray:
+    """Move along an arc of length ``ds`` turning by ``dtheta`` (exact)."""
+    theta = pose[:, 2]
+    half = 0.5 * dtheta
+    # sin(half)/half, with its Taylor series near zero (relative error < 1e-16 below 1e-4)
+    small = np.abs(half) < 1e-4
+    safe = np.where(small, 1.0, half)
+    sinc = np.where(small, 1.0 - half * half / 6.0, np.sin(safe) / safe)
+    chord = ds * sinc
+    out = np.empty_like(pose)
+    out[:, 0] = pose[:, 0] + chord * np.cos(theta + half)
+    out[:, 1] = pose[:, 1] + chord * np.sin(theta + half)
+    out[:, 2] = wrap_angle(theta + dtheta)
+    return out
+
+
+def unicycle_step(
+    pose: ArrayLike, v_m_s: ArrayLike, omega_rad_s: ArrayLike, dt_s: float
+) -> FloatArray:
+    """Advance unicycle robots one step (eq. 2), exact for v, omega held over the step.
+
+    Parameters
+    ----------
+    pose : array_like, shape (N, 3)
+        x [m], y [m], theta [rad].
+    v_m_s, omega_rad_s : array_like, shape (N,)
+        Linear [m/s] and angular [rad/s] speed held over the step.
+    dt_s : float
+        Step [s].
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        The poses after the step, theta wrapped to [-pi, pi).
+    """
+    p = as_float_array(pose, "pose", (None, 3))
+    n = p.shape[0]
+    v = as_float_array(np.broadcast_to(v_m_s, (n,)), "v_m_s", (n,))
+    w = as_float_array(np.broadcast_to(omega_rad_s, (n,)), "omega_rad_s", (n,))
+    return _arc_step(p, v * dt_s, w * dt_s)
+
+
+def diff_drive_step(pose: ArrayLike, dphi_rad: ArrayLike, geometry: RobotGeometry) -> FloatArray:
+    """Advance differential-drive robots by the wheel angles turned in a step (eq. 1).
+
+    Parameters
+    ----------
+    pose : array_like, shape (N, 3)
+        x [m], y [m], theta [rad].
+    dphi_rad : array_like, shape (N, 2)
+        Angle turned by the right and left wheels during the step [rad]
+        (``wheel_speed * dt`` for speeds held over the step).
+    geometry : RobotGeometry
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        The poses after the step: exact when the two wheel speeds keep their ratio over
+        the step (an arc), the usual odometry update otherwise.
+    """
+    p = as_float_array(pose, "pose", (None, 3))
+    d = as_float_array(dphi_rad, "dphi_rad", (p.shape[0], 2))
+    r, L = geometry.wheel_radius_m, geometry.axle_length_m
+    ds = r * (d[:, 0] + d[:, 1]) / 2.0
+    dtheta = r * (d[:, 0] - d[:, 1]) / L
+    return _arc_step(p, ds, dtheta)

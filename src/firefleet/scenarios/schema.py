@@ -1,0 +1,396 @@
+"""The scenario schema: typed, frozen, strict.
+
+A scenario file is YAML; an unknown key, a wrong type, a bad value or a duplicate key
+is an :class:`~firefleet.errors.InputError` naming the field (as a dotted path), the
+value and what was expected, with a suggestion for a misspelt key. Units follow the
+key's suffix (``_s``, ``_m``, ``_v``, ``_n_m``, ``_rad_s``); headings are typed in
+degrees (``heading_deg``) and converted to radians here, at the edge.
+
+Numbers are checked strictly: ``"1.0"`` (a string) or ``true`` where a number belongs
+is an error, not a conversion.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import json
+import math
+import types
+import typing
+from dataclasses import field
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+import pydantic
+import yaml
+from numpy.typing import NDArray
+
+from firefleet.control.pid import PidParams
+from firefleet.errors import InputError
+from firefleet.models.encoder import EncoderParams
+from firefleet.models.kinematics import RobotGeometry
+from firefleet.models.motor import MotorParams
+
+__all__ = [
+    "Claim",
+    "LoadStep",
+    "Scenario",
+    "VoltageStep",
+    "WheelSpeedStep",
+    "parse_scenario",
+    "read_scenario_file",
+]
+
+_STRICT = pydantic.ConfigDict(extra="forbid")
+_MAX_STEPS = 50_000_000
+_CLAIM_OPS = ("<", "<=", ">", ">=", "~")
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class Claim:
+    """A claim about one metric, checked after the run.
+
+    Attributes
+    ----------
+    metric : str
+        Metric name (a key of ``metrics.json``).
+    op : {"<", "<=", ">", ">=", "~"}
+        Comparison; ``"~"`` means within ``rel_tol`` (relative) of ``value``.
+    value : float
+        The bound or the target.
+    rel_tol : float
+        Relative tolerance of ``"~"``.
+    source : str
+        Where the claim comes from (the deliverable's section or the issue).
+    """
+
+    metric: str
+    op: Literal["<", "<=", ">", ">=", "~"]
+    value: float
+    rel_tol: float = 0.0
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if self.op == "~" and not self.rel_tol > 0:
+            raise InputError(f"claim on {self.metric}: op '~' needs rel_tol > 0")
+        if self.op != "~" and self.rel_tol != 0:
+            raise InputError(f"claim on {self.metric}: rel_tol is only for op '~'")
+
+    @property
+    def expected(self) -> str:
+        """The claim as a person reads it, e.g. ``"< 0.2"`` or ``"1.3955 +- 0.5%"``."""
+        if self.op == "~":
+            return f"{self.value:g} \u00b1 {100 * self.rel_tol:g}%"
+        return f"{self.op} {self.value:g}"
+
+    def holds(self, measured: float | None) -> bool:
+        """Whether ``measured`` satisfies the claim (a missing or NaN value does not)."""
+        if measured is None or math.isnan(measured):
+            return False
+        if self.op == "~":
+            return abs(measured - self.value) <= self.rel_tol * abs(self.value)
+        compare = {
+            "<": measured < self.value,
+            "<=": measured <= self.value,
+            ">": measured > self.value,
+            ">=": measured >= self.value,
+        }
+        return bool(compare[self.op])
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class VoltageStep:
+    """Open loop: every motor gets ``voltage_v`` from ``start_s`` on (0 V before)."""
+
+    kind: Literal["voltage-step"]
+    voltage_v: float
+    start_s: float = 0.0
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class WheelSpeedStep:
+    """Closed loop: every wheel's speed reference steps to ``speed_rad_s`` at ``start_s``."""
+
+    kind: Literal["wheel-speed-step"]
+    speed_rad_s: float
+    start_s: float = 0.0
+
+
+Command = Annotated[VoltageStep | WheelSpeedStep, pydantic.Field(discriminator="kind")]
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class LoadStep:
+    """Load torque on every wheel motor, stepping from 0 to ``torque_n_m`` at ``start_s``."""
+
+    torque_n_m: float = 0.0
+    start_s: float = 0.0
+
+
+# The metrics each command kind produces (firefleet.sim.metrics computes them).
+METRICS: dict[str, tuple[str, ...]] = {
+    "voltage-step": (
+        "steady_speed_rad_s",
+        "steady_current_a",
+        "peak_current_a",
+        "time_constant_s",
+    ),
+    "wheel-speed-step": (
+        "rise_time_s",
+        "settling_time_s",
+        "overshoot_pct",
+        "steady_state_error_rad_s",
+        "disturbance_recovery_s",
+        "peak_current_a",
+        "max_voltage_v",
+    ),
+}
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class Scenario:
+    """One experiment: the team, its hardware, the command, and the claims to check.
+
+    Attributes
+    ----------
+    name : str
+        Short name (letters, digits, ``-``).
+    title : str
+        One line for listings and the report.
+    command : VoltageStep or WheelSpeedStep
+        What drives the wheels.
+    duration_s : float
+        Simulated time [s].
+    dt_s : float
+        Fixed step [s] (the deliverable's 0.01 s by default).
+    seed : int
+        Seed of the run's random generator (encoder phases).
+    poses : tuple of (x_m, y_m, heading_deg)
+        Start pose of each robot; the team size is their number.
+    robot, motor, encoder, speed_pid
+        Hardware and low-level control; defaults from the deliverable's Table 2.
+    load : LoadStep
+        Load torque on the wheel motors.
+    reproduces : str
+        The deliverable's figure(s) this scenario reproduces ("" for none).
+    deliverable_says : str
+        What the deliverable reports for it, quoted or summarised.
+    claims : tuple of Claim
+        Checked against the metrics after the run.
+    """
+
+    name: str
+    title: str
+    command: Command
+    duration_s: float
+    dt_s: float = 0.01
+    seed: int = 0
+    poses: tuple[tuple[float, float, float], ...] = ((0.0, 0.0, 0.0),)
+    robot: RobotGeometry = field(default_factory=RobotGeometry)
+    motor: MotorParams = field(default_factory=MotorParams)
+    encoder: EncoderParams = field(default_factory=EncoderParams)
+    speed_pid: PidParams = field(default_factory=PidParams)
+    load: LoadStep = field(default_factory=LoadStep)
+    reproduces: str = ""
+    deliverable_says: str = ""
+    claims: tuple[Claim, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.name or not all(c.isalnum() or c in "-_" for c in self.name):
+            raise InputError(f"name must be letters, digits, '-' or '_', got {self.name!r}")
+        if not (math.isfinite(self.dt_s) and self.dt_s > 0):
+            raise InputError(f"dt_s must be > 0, got {self.dt_s}")
+        if not (math.isfinite(self.duration_s) and self.duration_s >= self.dt_s):
+            raise InputError(f"duration_s must be >= dt_s ({self.dt_s}), got {self.duration_s}")
+        if self.duration_s / self.dt_s > _MAX_STEPS:
+            raise InputError(
+                f"duration_s / dt_s = {self.duration_s / self.dt_s:.3g} steps, "
+                f"more than {_MAX_STEPS:,}"
+            )
+        if not self.poses:
+            raise InputError("poses must list at least one robot")
+        if not all(math.isfinite(v) for pose in self.poses for v in pose):
+            raise InputError("poses must be finite numbers")
+        if self.speed_pid.output_limit > self.motor.supply_v:
+            raise InputError(
+                f"speed_pid.output_limit ({self.speed_pid.output_limit} V) exceeds "
+                f"motor.supply_v ({self.motor.supply_v} V)"
+            )
+        if self.seed < 0:
+            raise InputError(f"seed must be >= 0, got {self.seed}")
+        known = METRICS[self.command.kind]
+        for claim in self.claims:
+            if claim.metric not in known:
+                raise InputError(
+                    f"claims: unknown metric {claim.metric!r} for a {self.command.kind} "
+                    f"scenario{_suggest(claim.metric, known)}; known: {', '.join(known)}"
+                )
+
+    @property
+    def n_robots(self) -> int:
+        """Team size N."""
+        return len(self.poses)
+
+    @property
+    def n_steps(self) -> int:
+        """Number of steps, ``round(duration_s / dt_s)``."""
+        return round(self.duration_s / self.dt_s)
+
+    @property
+    def initial_poses(self) -> NDArray[np.float64]:
+        """Start poses (N, 3): x [m], y [m], theta [rad]."""
+        p = np.array(self.poses, dtype=np.float64).reshape(-1, 3)
+        p[:, 2] = np.deg2rad(p[:, 2])
+        return p
+
+    @property
+    def metric_names(self) -> tuple[str, ...]:
+        """The metrics this scenario's run produces."""
+        return METRICS[self.command.kind]
+
+
+_ADAPTER = pydantic.TypeAdapter(Scenario)
+
+
+def _suggest(word: str, choices: typing.Iterable[str]) -> str:
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def _type_at(root: Any, loc: tuple[int | str, ...]) -> Any:
+    """The declared type at ``loc`` below ``root`` (None where it cannot be told)."""
+    tp = root
+    for key in loc:
+        origin = typing.get_origin(tp)
+        if origin is Annotated:
+            tp = typing.get_args(tp)[0]
+            origin = typing.get_origin(tp)
+        if dataclasses.is_dataclass(tp) and isinstance(key, str):
+            hints = typing.get_type_hints(tp, include_extras=True)
+            if key not in hints:
+                return None
+            tp = hints[key]
+        elif origin in (types.UnionType, typing.Union) and isinstance(key, str):
+            members = [m for m in typing.get_args(tp) if dataclasses.is_dataclass(m)]
+            matching = [
+                m
+                for m in members
+                if typing.get_args(typing.get_type_hints(m).get("kind", None)) == (key,)
+            ]
+            if not matching:
+                return None
+            tp = matching[0]
+        elif origin is tuple and isinstance(key, int):
+            args = typing.get_args(tp)
+            tp = args[0] if len(args) == 2 and args[1] is Ellipsis else args[key]
+        else:
+            return None
+    return tp
+
+
+def _where(loc: tuple[int | str, ...]) -> str:
+    """Dotted path of a location, without the tags of tagged unions."""
+    parts: list[str] = []
+    for key in loc:
+        if isinstance(key, int):
+            parts.append(f"[{key}]")
+        elif key not in ("voltage-step", "wheel-speed-step"):
+            parts.append(("." if parts else "") + key)
+    return "".join(parts) or "scenario"
+
+
+def _describe(error: Any) -> str:
+    loc = tuple(error["loc"])
+    kind = error["type"]
+    where = _where(loc)
+    if kind in ("unexpected_keyword_argument", "extra_forbidden"):
+        parent = _type_at(Scenario, loc[:-1])
+        names = [f.name for f in dataclasses.fields(parent)] if parent is not None else []
+        return f"{where}: unknown key{_suggest(str(loc[-1]), names)}"
+    if kind == "missing" or kind == "missing_argument":
+        return f"{where}: required, missing"
+    if kind == "value_error":
+        message = str(error["msg"]).removeprefix("Value error, ")
+        return message if loc == () else f"{where}: {message}"
+    value = json.dumps(error.get("input"), default=str)
+    if len(value) > 60:
+        value = value[:57] + "..."
+    return f"{where}: {error['msg']}, got {value}"
+
+
+def parse_scenario(data: Any, *, origin: str = "scenario") -> Scenario:
+    """Validate a scenario given as plain data (what YAML or JSON loads to).
+
+    Parameters
+    ----------
+    data : dict
+        The scenario's mapping.
+    origin : str
+        Named in error messages (a file name).
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    InputError
+        Naming every problem found, one per line.
+    """
+    if not isinstance(data, dict):
+        raise InputError(f"{origin}: a scenario must be a mapping, got {type(data).__name__}")
+    try:
+        text = json.dumps(data, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{origin}: not plain data (numbers, strings, lists, maps): {exc}") from exc
+    try:
+        return _ADAPTER.validate_json(text, strict=True)
+    except pydantic.ValidationError as exc:
+        problems = "\n".join(f"{origin}: {_describe(e)}" for e in exc.errors())
+        raise InputError(problems) from None
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """YAML safe loader that rejects duplicate keys (PyYAML keeps the last silently)."""
+
+
+def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -> dict[Any, Any]:
+    seen: set[Any] = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node)
+        if key in seen:
+            raise InputError(f"line {key_node.start_mark.line + 1}: duplicate key {key!r}")
+        seen.add(key)
+    return dict(loader.construct_mapping(node))
+
+
+_UniqueKeyLoader.add_constructor(
+    yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
+    _construct_mapping,  # type: ignore[arg-type]
+)
+
+
+def read_scenario_file(path: str | Path) -> Scenario:
+    """Read and validate a scenario YAML file.
+
+    Raises
+    ------
+    InputError
+        If the file is missing or unreadable, is not YAML, or is not a valid scenario.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{p}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{p}: cannot read: {exc}") from None
+    try:
+        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+    except InputError as exc:
+        raise InputError(f"{p}: {exc}") from None
+    except yaml.YAMLError as exc:
+        raise InputError(f"{p}: not valid YAML: {exc}".replace("\n", " ")) from None
+    return parse_scenario(data, origin=str(p))

@@ -1,0 +1,169 @@
+"""Metrics of a run: step-response figures and the scenario's named numbers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from firefleet.errors import InputError, as_float_array
+from firefleet.scenarios.schema import VoltageStep, WheelSpeedStep
+from firefleet.sim.result import SimResult
+
+__all__ = ["compute_metrics", "recovery_time", "settling_time", "step_response_info"]
+
+
+def _crossing(t: NDArray[np.float64], y: NDArray[np.float64], i: int, level: float) -> float:
+    """Time at which y crosses ``level`` between samples i - 1 and i (linear)."""
+    if i == 0 or y[i] == y[i - 1]:
+        return float(t[i])
+    return float(t[i - 1] + (level - y[i - 1]) * (t[i] - t[i - 1]) / (y[i] - y[i - 1]))
+
+
+def settling_time(
+    t_s: ArrayLike, y: ArrayLike, target: float, *, band: float = 0.02, t0_s: float = 0.0
+) -> float:
+    """Time from ``t0_s`` until ``y`` enters ``|y - target| <= band |target|`` for good.
+
+    Parameters
+    ----------
+    t_s, y : array_like, shape (T,)
+        Samples, from ``t0_s`` on.
+    target : float
+        The final value.
+    band : float
+        Relative half-width of the band (0.02 for the 2 % band).
+    t0_s : float
+        Start of the count [s].
+
+    Returns
+    -------
+    float
+        Seconds (0 if never outside, ``inf`` if still outside at the end), with the
+        last exit interpolated linearly between samples.
+    """
+    t = as_float_array(t_s, "t_s", (None,))
+    yy = as_float_array(y, "y", (t.shape[0],))
+    if t.size == 0:
+        raise InputError("settling_time needs at least one sample")
+    half = band * abs(target)
+    outside = np.abs(yy - target) > half
+    if not outside.any():
+        return 0.0
+    last = int(np.nonzero(outside)[0][-1])
+    if last == t.size - 1:
+        return math.inf
+    # interpolate where |y - target| comes back to the band edge on the exit side
+    edge = target + half if yy[last] > target else target - half
+    return _crossing(t, yy, last + 1, edge) - t0_s
+
+
+def recovery_time(
+    t_s: ArrayLike, y: ArrayLike, target: float, t_event_s: float, *, band: float = 0.02
+) -> float:
+    """Time from an event (a load step) until ``y`` is back inside the band for good.
+
+    Only samples at or after ``t_event_s`` count. Returns 0 if ``y`` never leaves the
+    band, ``inf`` if it has not come back by the end.
+    """
+    t = as_float_array(t_s, "t_s", (None,))
+    yy = as_float_array(y, "y", (t.shape[0],))
+    after = t >= t_event_s - 1e-12
+    if not after.any():
+        raise InputError(f"no sample at or after the event time {t_event_s} s")
+    return settling_time(t[after], yy[after], target, band=band, t0_s=t_event_s)
+
+
+def step_response_info(
+    t_s: ArrayLike, y: ArrayLike, target: float, *, t0_s: float = 0.0, band: float = 0.02
+) -> dict[str, float]:
+    """Rise time (10-90 %), settling time (band), overshoot of a step response.
+
+    Parameters
+    ----------
+    t_s, y : array_like, shape (T,)
+        The response from the step on (``t_s[0] >= t0_s``), starting from 0.
+    target : float
+        The step's final value (> 0 or < 0).
+    t0_s : float
+        Time of the step [s].
+    band : float
+        Relative half-width of the settling band.
+
+    Returns
+    -------
+    dict
+        ``rise_time_s`` (``inf`` if 90 % is never reached), ``settling_time_s``,
+        ``overshoot_pct`` (peak beyond the target, percent of the target, >= 0).
+        Crossings are interpolated linearly between samples.
+    """
+    t = as_float_array(t_s, "t_s", (None,))
+    yy = as_float_array(y, "y", (t.shape[0],))
+    if target == 0:
+        raise InputError("step_response_info needs a non-zero target")
+    s = yy / target  # normalised: rises from 0 to 1
+    rise = math.inf
+    above10 = np.nonzero(s >= 0.1)[0]
+    above90 = np.nonzero(s >= 0.9)[0]
+    if above90.size:
+        t10 = _crossing(t, s, int(above10[0]), 0.1)
+        t90 = _crossing(t, s, int(above90[0]), 0.9)
+        rise = t90 - t10
+    return {
+        "rise_time_s": rise,
+        "settling_time_s": settling_time(t, yy, target, band=band, t0_s=t0_s),
+        "overshoot_pct": max(0.0, float(s.max()) - 1.0) * 100.0,
+    }
+
+
+def compute_metrics(result: SimResult) -> dict[str, float]:
+    """The scenario's metrics from a run (worst case over every wheel of the team).
+
+    ``voltage-step``: ``steady_speed_rad_s`` and ``steady_current_a`` (mean over the last
+    second, averaged over the wheels), ``peak_current_a``, ``time_constant_s`` (time to
+    63.2 % of the steady speed).
+
+    ``wheel-speed-step``: ``rise_time_s``, ``settling_time_s`` and ``overshoot_pct`` of
+    the true wheel speed before the load step; ``steady_state_error_rad_s`` (distance of
+    the mean speed over the second before the load step, or the run's end, from the
+    reference); ``disturbance_recovery_s`` (from the load step until back inside the 2 %
+    band for good; 0 without a load step); ``peak_current_a``; ``max_voltage_v``.
+    """
+    scn = result.scenario
+    t = result.t
+    w = result.wheel_speed_rad_s.reshape(t.size, -1)  # (T, 2N)
+    current = result.current_a.reshape(t.size, -1)
+    cmd = scn.command
+    out: dict[str, float] = {"peak_current_a": float(np.abs(current).max())}
+    if isinstance(cmd, VoltageStep):
+        last = t >= t[-1] - 1.0 + 1e-9
+        steady = float(w[last].mean())
+        out["steady_speed_rad_s"] = steady
+        out["steady_current_a"] = float(current[last].mean())
+        after = t >= cmd.start_s - 1e-12
+        taus = [
+            _crossing(t[after], w[after, j], int(np.argmax(w[after, j] >= 0.632 * steady)), 0.632 * steady)
+            - cmd.start_s
+            for j in range(w.shape[1])
+        ]
+        out["time_constant_s"] = float(max(taus))
+        return out
+    assert isinstance(cmd, WheelSpeedStep)
+    load = scn.load
+    has_load = load.torque_n_m != 0 and load.start_s < t[-1]
+    end = load.start_s if has_load else t[-1] + 1e-9
+    pre = (t >= cmd.start_s - 1e-12) & (t < end)
+    infos = [step_response_info(t[pre], w[pre, j], cmd.speed_rad_s, t0_s=cmd.start_s) for j in range(w.shape[1])]
+    for key in ("rise_time_s", "settling_time_s", "overshoot_pct"):
+        out[key] = float(max(info[key] for info in infos))
+    window = pre & (t >= end - 1.0)
+    out["steady_state_error_rad_s"] = float(np.abs(w[window].mean(axis=0) - cmd.speed_rad_s).max())
+    if has_load:
+        out["disturbance_recovery_s"] = float(
+            max(recovery_time(t, w[:, j], cmd.speed_rad_s, load.start_s) for j in range(w.shape[1]))
+        )
+    else:
+        out["disturbance_recovery_s"] = 0.0
+    out["max_voltage_v"] = float(np.abs(result.voltage_v).max())
+    return out

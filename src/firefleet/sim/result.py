@@ -1,0 +1,71 @@
+"""The recorded time series of a run."""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from firefleet.scenarios.schema import Scenario
+
+__all__ = ["SimResult"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SimResult:
+    """Time series of a run, sampled every ``record_every`` steps (T samples, N robots).
+
+    Attributes
+    ----------
+    scenario : Scenario
+        What was run (with the seed actually used).
+    t : ndarray, shape (T,)
+        Time [s].
+    pose : ndarray, shape (T, N, 3)
+        True poses: x [m], y [m], theta [rad].
+    wheel_speed_rad_s : ndarray, shape (T, N, 2)
+        True wheel speeds, right and left [rad/s].
+    wheel_speed_measured_rad_s : ndarray, shape (T, N, 2)
+        Speeds measured by the encoders [rad/s].
+    wheel_speed_ref_rad_s : ndarray, shape (T, N, 2)
+        Speed references [rad/s] (NaN in open loop).
+    current_a : ndarray, shape (T, N, 2)
+        Motor currents [A].
+    voltage_v : ndarray, shape (T, N, 2)
+        Motor voltages applied from that sample on [V].
+    load_torque_n_m : ndarray, shape (T, N, 2)
+        Load torques applied from that sample on [N m].
+    """
+
+    scenario: Scenario
+    t: FloatArray
+    pose: FloatArray
+    wheel_speed_rad_s: FloatArray
+    wheel_speed_measured_rad_s: FloatArray
+    wheel_speed_ref_rad_s: FloatArray
+    current_a: FloatArray
+    voltage_v: FloatArray
+    load_torque_n_m: FloatArray
+
+    def arrays(self) -> dict[str, FloatArray]:
+        """The arrays by the names ``result.npz`` uses (``t``, ``pose``, and the rest)."""
+        return {
+            "t": self.t,
+            "pose": self.pose,
+            "wheel_speed_rad_s": self.wheel_speed_rad_s,
+            "wheel_speed_measured_rad_s": self.wheel_speed_measured_rad_s,
+            "wheel_speed_ref_rad_s": self.wheel_speed_ref_rad_s,
+            "current_a": self.current_a,
+            "voltage_v": self.voltage_v,
+            "load_torque_n_m": self.load_torque_n_m,
+        }
+
+    def to_npz_bytes(self) -> bytes:
+        """The arrays as the bytes of a compressed ``.npz`` file."""
+        buffer = io.BytesIO()
+        np.savez_compressed(buffer, **self.arrays())  # type: ignore[arg-type]
+        return buffer.getvalue()
