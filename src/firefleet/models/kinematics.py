@@ -80,7 +80,9 @@ def body_to_wheels(v_m_s: ArrayLike, omega_rad_s: ArrayLike, geometry: RobotGeom
     return np.stack([(2.0 * v + w * L) / (2.0 * r), (2.0 * v - w * L) / (2.0 * r)], axis=-1)
 
 
-def wheels_to_body(wheel_rad_s: ArrayLike, geometry: RobotGeometry) -> tuple[FloatArray, FloatArray]:
+def wheels_to_body(
+    wheel_rad_s: ArrayLike, geometry: RobotGeometry
+) -> tuple[FloatArray, FloatArray]:
     """Body velocities from wheel angular speeds (eq. 1): the inverse of eqs. 3-4.
 
     Parameters

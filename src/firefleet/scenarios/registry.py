@@ -16,7 +16,9 @@ _BUILTIN = resources.files("firefleet.scenarios") / "builtin"
 
 def builtin_names() -> list[str]:
     """Names of the built-in scenarios, sorted."""
-    return sorted(p.name.removesuffix(".yaml") for p in _BUILTIN.iterdir() if p.name.endswith(".yaml"))
+    return sorted(
+        p.name.removesuffix(".yaml") for p in _BUILTIN.iterdir() if p.name.endswith(".yaml")
+    )
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:

@@ -344,7 +344,9 @@ def parse_scenario(data: Any, *, origin: str = "scenario") -> Scenario:
     try:
         text = json.dumps(data, allow_nan=False)
     except (TypeError, ValueError) as exc:
-        raise InputError(f"{origin}: not plain data (numbers, strings, lists, maps): {exc}") from exc
+        raise InputError(
+            f"{origin}: not plain data (numbers, strings, lists, maps): {exc}"
+        ) from exc
     try:
         return _ADAPTER.validate_json(text, strict=True)
     except pydantic.ValidationError as exc:
@@ -368,7 +370,7 @@ def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -> dict[
 
 _UniqueKeyLoader.add_constructor(
     yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
-    _construct_mapping,  # type: ignore[arg-type]
+    _construct_mapping,
 )
 
 
@@ -388,7 +390,7 @@ def read_scenario_file(path: str | Path) -> Scenario:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{p}: cannot read: {exc}") from None
     try:
-        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+        data = yaml.load(text, Loader=_UniqueKeyLoader)
     except InputError as exc:
         raise InputError(f"{p}: {exc}") from None
     except yaml.YAMLError as exc:

@@ -74,13 +74,12 @@ def simulate(
     pid_params = scenario.speed_pid
     cmd = scenario.command
     open_loop = isinstance(cmd, VoltageStep)
+    step_value = cmd.voltage_v if isinstance(cmd, VoltageStep) else cmd.speed_rad_s
 
     pose = scenario.initial_poses
     current = np.zeros((n, 2))
     speed = np.zeros((n, 2))
-    count_rad = (
-        2.0 * np.pi / enc_params.counts_per_rev if enc_params.counts_per_rev else 0.0
-    )
+    count_rad = 2.0 * np.pi / enc_params.counts_per_rev if enc_params.counts_per_rev else 0.0
     encoder = encoder_init(rng.uniform(0.0, count_rad, size=(n, 2)), enc_params)
     measured = np.zeros((n, 2))
     pid = pid_init(measured)
@@ -98,13 +97,15 @@ def simulate(
 
     for k in range(n_steps + 1):
         t = k * dt
-        load = np.full((n, 2), scenario.load.torque_n_m if t >= scenario.load.start_s - 1e-9 else 0.0)
+        load = np.full(
+            (n, 2), scenario.load.torque_n_m if t >= scenario.load.start_s - 1e-9 else 0.0
+        )
+        level = step_value if t >= cmd.start_s - 1e-9 else 0.0
         if open_loop:
-            assert isinstance(cmd, VoltageStep)
             ref = np.full((n, 2), np.nan)
-            voltage = np.full((n, 2), cmd.voltage_v if t >= cmd.start_s - 1e-9 else 0.0)
+            voltage = np.full((n, 2), level)
         else:
-            ref = np.full((n, 2), cmd.speed_rad_s if t >= cmd.start_s - 1e-9 else 0.0)
+            ref = np.full((n, 2), level)
             pid, voltage = pid_step(pid, ref, measured, pid_params, dt)
         if row < n_rec and rec_steps[row] == k:
             pose_rec[row] = pose

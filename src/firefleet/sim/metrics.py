@@ -3,15 +3,22 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError, as_float_array
-from firefleet.scenarios.schema import VoltageStep, WheelSpeedStep
+from firefleet.scenarios.schema import Claim, VoltageStep, WheelSpeedStep
 from firefleet.sim.result import SimResult
 
-__all__ = ["compute_metrics", "recovery_time", "settling_time", "step_response_info"]
+__all__ = [
+    "compute_metrics",
+    "metrics_document",
+    "recovery_time",
+    "settling_time",
+    "step_response_info",
+]
 
 
 def _crossing(t: NDArray[np.float64], y: NDArray[np.float64], i: int, level: float) -> float:
@@ -143,7 +150,9 @@ def compute_metrics(result: SimResult) -> dict[str, float]:
         out["steady_current_a"] = float(current[last].mean())
         after = t >= cmd.start_s - 1e-12
         taus = [
-            _crossing(t[after], w[after, j], int(np.argmax(w[after, j] >= 0.632 * steady)), 0.632 * steady)
+            _crossing(
+                t[after], w[after, j], int(np.argmax(w[after, j] >= 0.632 * steady)), 0.632 * steady
+            )
             - cmd.start_s
             for j in range(w.shape[1])
         ]
@@ -154,7 +163,10 @@ def compute_metrics(result: SimResult) -> dict[str, float]:
     has_load = load.torque_n_m != 0 and load.start_s < t[-1]
     end = load.start_s if has_load else t[-1] + 1e-9
     pre = (t >= cmd.start_s - 1e-12) & (t < end)
-    infos = [step_response_info(t[pre], w[pre, j], cmd.speed_rad_s, t0_s=cmd.start_s) for j in range(w.shape[1])]
+    infos = [
+        step_response_info(t[pre], w[pre, j], cmd.speed_rad_s, t0_s=cmd.start_s)
+        for j in range(w.shape[1])
+    ]
     for key in ("rise_time_s", "settling_time_s", "overshoot_pct"):
         out[key] = float(max(info[key] for info in infos))
     window = pre & (t >= end - 1.0)
@@ -167,3 +179,23 @@ def compute_metrics(result: SimResult) -> dict[str, float]:
         out["disturbance_recovery_s"] = 0.0
     out["max_voltage_v"] = float(np.abs(result.voltage_v).max())
     return out
+
+
+def metrics_document(
+    scenario_name: str, claims: tuple[Claim, ...], metrics: dict[str, float]
+) -> dict[str, Any]:
+    """The ``metrics.json`` object: scenario name, checked claims, and the metrics.
+
+    Each claim is ``{"name", "expected", "measured", "passed", "source"}``.
+    """
+    checked = [
+        {
+            "name": claim.metric,
+            "expected": claim.expected,
+            "measured": metrics.get(claim.metric),
+            "passed": claim.holds(metrics.get(claim.metric)),
+            "source": claim.source,
+        }
+        for claim in claims
+    ]
+    return {"scenario": scenario_name, "claims": checked, **metrics}

@@ -1,0 +1,71 @@
+"""Writing a command's outputs all or nothing.
+
+Files are written into a staging folder beside the destination and moved into place
+(``os.replace``, atomic on one file system) only when every one of them is complete,
+so an error or an interruption leaves no half-written output behind.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from firefleet.errors import InputError
+
+__all__ = ["json_text", "staged_dir"]
+
+
+def _finite_or_none(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite_or_none(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite_or_none(v) for v in value]
+    return value
+
+
+def json_text(document: Any) -> str:
+    """JSON text of ``document`` with non-finite numbers written as ``null``."""
+    return json.dumps(_finite_or_none(document), indent=2, allow_nan=False) + "\n"
+
+
+@contextmanager
+def staged_dir(destination: str | Path) -> Iterator[Path]:
+    """Stage files for ``destination`` and move them there when the block succeeds.
+
+    Yields a temporary folder; write the outputs into it (subfolders allowed). On a
+    clean exit each file replaces its namesake in ``destination`` (created if needed;
+    other files there are kept); on an exception nothing in ``destination`` changes.
+
+    Raises
+    ------
+    InputError
+        If ``destination`` exists and is not a folder, or cannot be created.
+    """
+    dest = Path(destination)
+    if dest.exists() and not dest.is_dir():
+        raise InputError(f"--out {dest}: exists and is not a folder")
+    parent = dest.resolve().parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+        stage = Path(tempfile.mkdtemp(prefix=f".{dest.name}.staging-", dir=parent))
+    except OSError as exc:
+        raise InputError(f"--out {dest}: cannot create: {exc.strerror}") from None
+    try:
+        yield stage
+        dest.mkdir(parents=True, exist_ok=True)
+        for path in sorted(stage.rglob("*")):
+            if path.is_file():
+                target = dest / path.relative_to(stage)
+                target.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(path, target)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)

@@ -1,0 +1,169 @@
+"""Figures of a run (the only module that imports matplotlib)."""
+
+from __future__ import annotations
+
+import io
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from firefleet.scenarios.schema import VoltageStep, WheelSpeedStep
+from firefleet.sim.result import SimResult
+
+__all__ = ["figures"]
+
+
+def _png(fig: matplotlib.figure.Figure) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def _motor_response(result: SimResult) -> bytes:
+    """Speed, current and voltage against time (the layout of Figures 24 and 25)."""
+    scn = result.scenario
+    t = result.t
+    w = result.wheel_speed_rad_s[:, 0, 0]  # robot 0, right wheel: all wheels are alike
+    cmd = scn.command
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True, height_ratios=[3, 2, 1.4])
+    ax = axes[0]
+    if isinstance(cmd, WheelSpeedStep):
+        ax.plot(t, result.wheel_speed_ref_rad_s[:, 0, 0], "k--", lw=1.2, label="reference")
+        ax.plot(
+            t,
+            result.wheel_speed_measured_rad_s[:, 0, 0],
+            color="0.7",
+            lw=0.5,
+            label=f"encoder ({scn.encoder.counts_per_rev} counts/rev)",
+        )
+        band = 0.02 * abs(cmd.speed_rad_s)
+        ax.axhspan(
+            cmd.speed_rad_s - band,
+            cmd.speed_rad_s + band,
+            color="tab:green",
+            alpha=0.12,
+            label="2 % band",
+        )
+    else:
+        assert isinstance(cmd, VoltageStep)
+        level = cmd.voltage_v * np.where(t >= cmd.start_s - 1e-9, 1.0, 0.0)
+        ax.plot(
+            t,
+            level,
+            "k--",
+            lw=1.2,
+            label=f'input {cmd.voltage_v:g} V (the deliverable\'s "reference")',
+        )
+        steady = cmd.voltage_v * scn.motor.speed_gain_rad_s_per_v
+        ax.axhline(
+            steady,
+            color="tab:red",
+            ls=":",
+            lw=1.2,
+            label=f"Kt V / (R B + Ke Kt) = {steady:.4f} rad/s",
+        )
+    ax.plot(t, w, color="tab:blue", lw=1.8, label="actual speed")
+    if scn.load.torque_n_m != 0 and scn.load.start_s < t[-1]:
+        for a in axes:
+            a.axvline(scn.load.start_s, color="tab:orange", ls=":", lw=1)
+        ax.annotate(
+            f"load step {scn.load.torque_n_m:g} N m",
+            (scn.load.start_s, 0.05),
+            xycoords=("data", "axes fraction"),
+            xytext=(4, 0),
+            textcoords="offset points",
+            color="tab:orange",
+            fontsize=8,
+        )
+    ax.set_ylabel("wheel speed [rad/s]")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.grid(alpha=0.3)
+    ax.set_title(f"{scn.name}: {scn.title}", fontsize=10)
+    axes[1].plot(t, result.current_a[:, 0, 0], color="tab:purple", lw=1.4)
+    axes[1].set_ylabel("current [A]")
+    axes[1].grid(alpha=0.3)
+    axes[2].step(t, result.voltage_v[:, 0, 0], where="post", color="tab:brown", lw=1.0)
+    vmax = max(float(np.abs(result.voltage_v[:, 0, 0]).max()), 1e-9)
+    axes[2].set_ylim(-0.08 * vmax, 1.15 * vmax)
+    axes[2].set_ylabel("voltage [V]")
+    axes[2].set_xlabel("time [s]")
+    axes[2].grid(alpha=0.3)
+    fig.align_ylabels(axes)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def _transients(result: SimResult, metrics: dict[str, float]) -> bytes:
+    """Zoom on the speed step and the load step, with the 2 % band and the measured times."""
+    scn = result.scenario
+    cmd = scn.command
+    assert isinstance(cmd, WheelSpeedStep)
+    t = result.t
+    windows = [("speed step", cmd.start_s, metrics.get("settling_time_s"))]
+    if scn.load.torque_n_m != 0 and scn.load.start_s < t[-1]:
+        windows.append(
+            (
+                f"load step ({scn.load.torque_n_m:g} N m)",
+                scn.load.start_s,
+                metrics.get("disturbance_recovery_s"),
+            )
+        )
+    fig, axes = plt.subplots(1, len(windows), figsize=(4.2 * len(windows), 3.6), squeeze=False)
+    band = 0.02 * abs(cmd.speed_rad_s)
+    for ax, (label, t0, settle) in zip(axes[0], windows, strict=True):
+        sel = (t >= t0 - 0.05) & (t <= t0 + 0.8)
+        ax.axhspan(
+            cmd.speed_rad_s - band,
+            cmd.speed_rad_s + band,
+            color="tab:green",
+            alpha=0.15,
+            label="2 % band",
+        )
+        ax.step(
+            t[sel],
+            result.wheel_speed_measured_rad_s[sel, 0, 0],
+            where="post",
+            color="0.55",
+            lw=0.8,
+            label="encoder",
+        )
+        ax.plot(t[sel], result.wheel_speed_ref_rad_s[sel, 0, 0], "k--", lw=1, label="reference")
+        ax.plot(
+            t[sel],
+            result.wheel_speed_rad_s[sel, 0, 0],
+            ".-",
+            color="tab:blue",
+            lw=1.6,
+            ms=3,
+            label="actual",
+        )
+        if settle is not None and np.isfinite(settle):
+            ax.axvline(t0 + settle, color="tab:red", ls=":", lw=1.2)
+            ax.annotate(
+                f"in band for good\nafter {settle:.3f} s",
+                (t0 + settle, 0.35),
+                xycoords=("data", "axes fraction"),
+                xytext=(4, 0),
+                textcoords="offset points",
+                color="tab:red",
+                fontsize=8,
+            )
+        ax.set_title(label, fontsize=10)
+        ax.set_xlabel("time [s]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel("wheel speed [rad/s]")
+    axes[0, 0].legend(loc="lower right", fontsize=7)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def figures(result: SimResult, metrics: dict[str, float]) -> dict[str, bytes]:
+    """The figures of a run, as PNG bytes by file name."""
+    out = {"response.png": _motor_response(result)}
+    if isinstance(result.scenario.command, WheelSpeedStep):
+        out["transients.png"] = _transients(result, metrics)
+    return out
