@@ -54,7 +54,9 @@ class RobotGeometry:
 def wrap_angle(angle_rad: ArrayLike) -> FloatArray:
     """Wrap angles to [-pi, pi) [rad]."""
     a = np.asarray(angle_rad, dtype=np.float64)
-    return np.asarray((a + np.pi) % (2.0 * np.pi) - np.pi, dtype=np.float64)
+    w = (a + np.pi) % (2.0 * np.pi) - np.pi
+    # a hair below an odd multiple of -pi, the modulo rounds up to 2 pi: give -pi, not +pi
+    return np.asarray(np.where(w >= np.pi, w - 2.0 * np.pi, w), dtype=np.float64)
 
 
 def body_to_wheels(v_m_s: ArrayLike, omega_rad_s: ArrayLike, geometry: RobotGeometry) -> FloatArray:
