@@ -1,0 +1,26 @@
+"""The README's example runs as shipped and prints the claims' numbers."""
+
+from __future__ import annotations
+
+import re
+import runpy
+from pathlib import Path
+
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_motor_pid_example(capsys: pytest.CaptureFixture[str]) -> None:
+    runpy.run_path(str(EXAMPLES / "motor_pid.py"), run_name="__main__")
+    out = capsys.readouterr().out
+    rise, settle = (float(x) for x in re.findall(r"rise ([\d.]+) s, settling ([\d.]+) s", out)[0])
+    assert rise < 0.2  # the deliverable's response time bound (2.6.4.1)
+    assert settle < 0.5  # the deliverable's settling time bound
+    assert "(1001, 3, 2)" in out  # 10 s at 10 ms, three robots, two wheels
+
+
+def test_readme_example_is_the_shipped_file() -> None:
+    readme = (EXAMPLES.parent / "README.md").read_text()
+    code = (EXAMPLES / "motor_pid.py").read_text().split('"""', 2)[2].strip()
+    assert code in readme
