@@ -17,6 +17,7 @@ explicit Euler would be wrong, so the step uses ``expm`` of the augmented matrix
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -128,6 +129,7 @@ class DiscreteMotor:
     c_bd: FloatArray = field(repr=False)
 
 
+@functools.lru_cache(maxsize=64)
 def discretise_motor(params: MotorParams, dt_s: float) -> DiscreteMotor:
     """Discretise the motor exactly for inputs held over ``dt_s`` (zero-order hold).
 
@@ -145,8 +147,9 @@ def discretise_motor(params: MotorParams, dt_s: float) -> DiscreteMotor:
 
     Notes
     -----
-    Van Loan's method: with the shaft angle appended to the state (``dphi/dt = w``),
-    ``expm([[A3, B3], [0, 0]] dt) = [[Ad3, Bd3], [0, I]]``.
+    Cached per (params, dt_s): the result is immutable, and ``expm`` is the costliest
+    part of a short run. Van Loan's method: with the shaft angle appended to the state
+    (``dphi/dt = w``), ``expm([[A3, B3], [0, 0]] dt) = [[Ad3, Bd3], [0, I]]``.
     """
     if not (np.isfinite(dt_s) and dt_s > 0):
         raise InputError(f"dt_s must be > 0, got {dt_s}")
@@ -155,13 +158,11 @@ def discretise_motor(params: MotorParams, dt_s: float) -> DiscreteMotor:
     m[:2, 3:] = params.b_matrix
     m[2, 1] = 1.0  # dphi/dt = w
     e = scipy.linalg.expm(m * dt_s)
+    blocks = [e[:2, :2].copy(), e[:2, 3:].copy(), e[2, :2].copy(), e[2, 3:].copy()]
+    for block in blocks:
+        block.flags.writeable = False  # shared by every caller through the cache
     return DiscreteMotor(
-        params=params,
-        dt_s=float(dt_s),
-        ad=e[:2, :2].copy(),
-        bd=e[:2, 3:].copy(),
-        c_ad=e[2, :2].copy(),
-        c_bd=e[2, 3:].copy(),
+        params=params, dt_s=float(dt_s), ad=blocks[0], bd=blocks[1], c_ad=blocks[2], c_bd=blocks[3]
     )
 
 
