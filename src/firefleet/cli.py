@@ -41,6 +41,9 @@ EXIT_OK, EXIT_CLAIM_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 @contextmanager
 def _progress_bar(console: Console, label: str) -> Iterator[ProgressCallback]:
     columns = (TextColumn("{task.description}"), BarColumn(), TimeRemainingColumn())
+    if not console.is_terminal:  # a log file gets no bar (and no blank lines from one)
+        yield lambda done, total: None
+        return
     with Progress(*columns, console=console, transient=True) as bar:
         task = bar.add_task(label, total=None)
 

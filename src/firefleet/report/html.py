@@ -54,7 +54,7 @@ def _fmt(value: Any) -> str:
     if value is None:
         return "n/a"
     if isinstance(value, float):
-        return f"{value:.4g}"
+        return f"{value:.5g}"
     return html.escape(str(value))
 
 
