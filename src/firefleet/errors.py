@@ -8,10 +8,13 @@ and exit status 2.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Iterable
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["InputError", "as_float_array"]
+__all__ = ["InputError", "as_float_array", "check_fields"]
 
 
 class InputError(ValueError):
@@ -51,3 +54,26 @@ def as_float_array(
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} must be finite, got non-finite values")
     return arr
+
+
+def check_fields(
+    obj: object,
+    section: str,
+    *,
+    positive: Iterable[str] = (),
+    non_negative: Iterable[str] = (),
+) -> None:
+    """Check numeric fields of a parameter dataclass, naming ``section.field`` on failure.
+
+    Raises
+    ------
+    InputError
+        If a field in ``positive`` is not a finite number > 0, or one in
+        ``non_negative`` is not a finite number >= 0.
+    """
+    prefix = f"{section}." if section else ""
+    for names, ok, bound in ((positive, float.__gt__, "> 0"), (non_negative, float.__ge__, ">= 0")):
+        for name in names:
+            value = getattr(obj, name)
+            if not (math.isfinite(value) and ok(float(value), 0.0)):
+                raise InputError(f"{prefix}{name} must be {bound}, got {value}")

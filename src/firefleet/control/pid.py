@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from firefleet.errors import InputError
+from firefleet.errors import InputError, check_fields
 
 __all__ = ["PidParams", "PidState", "pid_init", "pid_step"]
 
@@ -85,14 +85,12 @@ class PidParams:
     output_limit: float = 12.0
 
     def __post_init__(self) -> None:
-        for name in ("kp", "ki", "kd"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0):
-                raise InputError(f"speed_pid.{name} must be >= 0, got {value}")
-        for name in ("derivative_filter_s", "tracking_time_s", "output_limit"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise InputError(f"speed_pid.{name} must be > 0, got {value}")
+        check_fields(
+            self,
+            "speed_pid",
+            positive=("derivative_filter_s", "tracking_time_s", "output_limit"),
+            non_negative=("kp", "ki", "kd"),
+        )
         if not 0.0 <= self.setpoint_weight <= 1.0:
             raise InputError(
                 f"speed_pid.setpoint_weight must be in [0, 1], got {self.setpoint_weight}"

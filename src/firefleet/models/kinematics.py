@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from firefleet.errors import InputError, as_float_array
+from firefleet.errors import as_float_array, check_fields
 
 __all__ = [
     "RobotGeometry",
@@ -45,10 +45,7 @@ class RobotGeometry:
     axle_length_m: float = 0.2
 
     def __post_init__(self) -> None:
-        for name in ("wheel_radius_m", "axle_length_m"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise InputError(f"robot.{name} must be > 0, got {value}")
+        check_fields(self, "robot", positive=("wheel_radius_m", "axle_length_m"))
 
 
 def wrap_angle(angle_rad: ArrayLike) -> FloatArray:

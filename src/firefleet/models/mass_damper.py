@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from firefleet.errors import InputError, as_float_array
+from firefleet.errors import InputError, as_float_array, check_fields
 
 __all__ = ["MassDamperParams", "mass_damper_step"]
 
@@ -43,13 +43,7 @@ class MassDamperParams:
     kd_n_s_m: float = 1.0
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.mass_kg) and self.mass_kg > 0):
-            raise InputError(f"mass_kg must be > 0, got {self.mass_kg}")
-        if not (self.damping_n_s_m >= 0 and self.kd_n_s_m >= 0):
-            raise InputError(
-                f"damping_n_s_m and kd_n_s_m must be >= 0, got "
-                f"{self.damping_n_s_m} and {self.kd_n_s_m}"
-            )
+        check_fields(self, "", positive=("mass_kg",), non_negative=("damping_n_s_m", "kd_n_s_m"))
         if self.damping_n_s_m + self.kd_n_s_m <= 0:
             raise InputError("damping_n_s_m + kd_n_s_m must be > 0")
 

@@ -24,7 +24,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from firefleet.errors import InputError
+from firefleet.errors import InputError, check_fields
 
 __all__ = ["DiscreteMotor", "MotorParams", "discretise_motor", "motor_step"]
 
@@ -64,19 +64,19 @@ class MotorParams:
     supply_v: float = 12.0
 
     def __post_init__(self) -> None:
-        for name in (
-            "resistance_ohm",
-            "inductance_h",
-            "inertia_kg_m2",
-            "back_emf_v_s",
-            "torque_n_m_a",
-            "supply_v",
-        ):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise InputError(f"motor.{name} must be > 0, got {value}")
-        if not (np.isfinite(self.damping_n_m_s) and self.damping_n_m_s >= 0):
-            raise InputError(f"motor.damping_n_m_s must be >= 0, got {self.damping_n_m_s}")
+        check_fields(
+            self,
+            "motor",
+            positive=(
+                "resistance_ohm",
+                "inductance_h",
+                "inertia_kg_m2",
+                "back_emf_v_s",
+                "torque_n_m_a",
+                "supply_v",
+            ),
+            non_negative=("damping_n_m_s",),
+        )
 
     @property
     def a_matrix(self) -> FloatArray:

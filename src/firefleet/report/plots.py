@@ -23,6 +23,12 @@ def _png(fig: matplotlib.figure.Figure) -> bytes:
     return buffer.getvalue()
 
 
+def _band(ax: matplotlib.axes.Axes, target: float) -> None:
+    """Shade the 2 % settling band around ``target``."""
+    half = 0.02 * abs(target)
+    ax.axhspan(target - half, target + half, color="tab:green", alpha=0.15, label="2 % band")
+
+
 def _motor_response(result: SimResult) -> bytes:
     """Speed, current and voltage against time (the layout of Figures 24 and 25)."""
     scn = result.scenario
@@ -40,14 +46,7 @@ def _motor_response(result: SimResult) -> bytes:
             lw=0.5,
             label=f"encoder ({scn.encoder.counts_per_rev} counts/rev)",
         )
-        band = 0.02 * abs(cmd.speed_rad_s)
-        ax.axhspan(
-            cmd.speed_rad_s - band,
-            cmd.speed_rad_s + band,
-            color="tab:green",
-            alpha=0.12,
-            label="2 % band",
-        )
+        _band(ax, cmd.speed_rad_s)
     else:
         assert isinstance(cmd, VoltageStep)
         level = cmd.voltage_v * np.where(t >= cmd.start_s - 1e-9, 1.0, 0.0)
@@ -113,16 +112,9 @@ def _transients(result: SimResult, metrics: dict[str, float]) -> bytes:
             )
         )
     fig, axes = plt.subplots(1, len(windows), figsize=(4.2 * len(windows), 3.6), squeeze=False)
-    band = 0.02 * abs(cmd.speed_rad_s)
     for ax, (label, t0, settle) in zip(axes[0], windows, strict=True):
         sel = (t >= t0 - 0.05) & (t <= t0 + 0.8)
-        ax.axhspan(
-            cmd.speed_rad_s - band,
-            cmd.speed_rad_s + band,
-            color="tab:green",
-            alpha=0.15,
-            label="2 % band",
-        )
+        _band(ax, cmd.speed_rad_s)
         ax.step(
             t[sel],
             result.wheel_speed_measured_rad_s[sel, 0, 0],
