@@ -15,6 +15,7 @@ exits 1.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -113,19 +114,13 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     if args.seed is not None:
         if args.seed < 0:
             raise InputError(f"--seed must be >= 0, got {args.seed}")
-        scenario = _with_seed(scenario, args.seed)
+        scenario = dataclasses.replace(scenario, seed=args.seed)
     dest = Path(args.out) if args.out else Path("runs") / scenario.name
     with staged_dir(dest) as stage:
         document, _ = _run_into(scenario, stage, plots=not args.no_plots, err=err)
     out.print(_claims_table(document))
     out.print(f"wrote {dest}/")
     return EXIT_OK if _all_passed(document) else EXIT_CLAIM_FAILED
-
-
-def _with_seed(scenario: Scenario, seed: int) -> Scenario:
-    import dataclasses
-
-    return dataclasses.replace(scenario, seed=seed)
 
 
 def _cmd_validate(args: argparse.Namespace, out: Console, err: Console) -> int:
