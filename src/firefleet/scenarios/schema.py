@@ -252,6 +252,11 @@ class Scenario:
 
 
 _ADAPTER = pydantic.TypeAdapter(Scenario)
+# the ``kind`` tags of the command union: pydantic puts them in error locations
+_COMMAND_TAGS = frozenset(
+    typing.get_args(typing.get_type_hints(member)["kind"])[0]
+    for member in typing.get_args(typing.get_args(Command)[0])
+)
 
 
 def _suggest(word: str, choices: typing.Iterable[str]) -> str:
@@ -296,7 +301,7 @@ def _where(loc: tuple[int | str, ...]) -> str:
     for key in loc:
         if isinstance(key, int):
             parts.append(f"[{key}]")
-        elif key not in ("voltage-step", "wheel-speed-step"):
+        elif key not in _COMMAND_TAGS:
             parts.append(("." if parts else "") + key)
     return "".join(parts) or "scenario"
 

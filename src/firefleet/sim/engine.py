@@ -87,21 +87,21 @@ def simulate(
     dt = scenario.dt_s
     n_steps = scenario.n_steps
     n = scenario.n_robots
-    motor = discretise_motor(scenario.motor, dt)
     enc_params = scenario.encoder
-    pid_params = scenario.speed_pid
-    cmd = scenario.command
-    open_loop = isinstance(cmd, VoltageStep)
-    step_value = cmd.voltage_v if isinstance(cmd, VoltageStep) else cmd.speed_rad_s
-
-    pose = scenario.initial_poses
-    current = np.zeros((n, 2))
-    speed = np.zeros((n, 2))
     count_rad = 2.0 * np.pi / enc_params.counts_per_rev if enc_params.counts_per_rev else 0.0
     phase = rng.uniform(0.0, count_rad, size=(n, 2))
     rec_steps = np.unique(np.r_[np.arange(0, n_steps + 1, record_every), n_steps])
     if backend == "scalar" or (backend == "auto" and n <= SCALAR_MAX_ROBOTS):
         return _simulate_scalar(scenario, phase, rec_steps, progress)
+
+    motor = discretise_motor(scenario.motor, dt)
+    pid_params = scenario.speed_pid
+    cmd = scenario.command
+    open_loop = isinstance(cmd, VoltageStep)
+    step_value = cmd.voltage_v if isinstance(cmd, VoltageStep) else cmd.speed_rad_s
+    pose = scenario.initial_poses
+    current = np.zeros((n, 2))
+    speed = np.zeros((n, 2))
     encoder = encoder_init(phase, enc_params)
     measured = np.zeros((n, 2))
     pid = pid_init(measured)
