@@ -82,15 +82,24 @@ def _claims_table(document: dict[str, Any]) -> Table:
     table.add_column("measured", justify="right")
     table.add_column("claim")
     table.add_column("result")
-    by_name = {c["name"]: c for c in document["claims"]}
     for key, value in document.items():
         if key in ("scenario", "claims"):
             continue
-        claim = by_name.get(key)
-        shown = "n/a" if value is None else f"{value:.6g}"
-        verdict = "" if claim is None else ("[green]passed" if claim["passed"] else "[red]FAILED")
-        table.add_row(key, shown, "" if claim is None else claim["expected"], verdict)
+        claims = [c for c in document["claims"] if c["name"].split("[")[0] == key]
+        expected = "; ".join(
+            c["expected"] + c["name"].removeprefix(key).replace("[", " [") for c in claims
+        )
+        verdict = " ".join("[green]passed" if c["passed"] else "[red]FAILED" for c in claims)
+        table.add_row(key, _shown(value), expected, verdict)
     return table
+
+
+def _shown(value: Any) -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, list):
+        return "[" + ", ".join(_shown(v) for v in value) + "]"
+    return f"{value:.6g}"
 
 
 def _all_passed(document: dict[str, Any]) -> bool:

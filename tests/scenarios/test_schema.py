@@ -10,6 +10,7 @@ import pytest
 
 from firefleet.errors import InputError
 from firefleet.scenarios import load_scenario, parse_scenario, read_scenario_file
+from firefleet.scenarios.schema import Claim
 
 MINIMAL: dict[str, Any] = {
     "name": "t",
@@ -127,3 +128,26 @@ def test_claims_check_their_bound() -> None:
     assert not below.holds(1.0)
     assert not below.holds(float("nan"))
     assert near.expected == "1.3955 \u00b1 0.5%"
+
+
+def test_claims_on_per_robot_metrics() -> None:
+    every = Claim(metric="wait_time_s", op=">", value=0.0)
+    second = Claim(metric="wait_time_s", op="<=", value=0.0, robot=2)
+    waits = [3.5, 0.0, 1.25]
+    # without a robot, every entry must satisfy the claim
+    assert not every.holds(waits)
+    assert every.holds([3.5, 0.1])
+    assert second.holds(waits)
+    assert second.select(waits) == 0.0
+    assert second.label == "wait_time_s[robot 2]"
+    # a robot the metric does not have, a scalar metric, NaN: the claim fails
+    assert not Claim(metric="wait_time_s", op=">", value=0.0, robot=4).holds(waits)
+    assert not second.holds(1.0)
+    assert not every.holds([1.0, float("nan")])
+    assert not every.holds([])
+
+
+def test_claim_robots_are_numbered_from_one() -> None:
+    claim = {"metric": "steady_speed_rad_s", "op": ">", "value": 0.0, "robot": 0}
+    with pytest.raises(InputError, match=r"claims\[0\]: claim on steady_speed_rad_s: robot"):
+        parse_scenario(_with(claims=[claim]))

@@ -1,4 +1,8 @@
-"""Figures of a run (the only module that imports matplotlib)."""
+"""Figures of a run, by the kind of its command.
+
+matplotlib is imported only inside ``firefleet.report`` (this module and the topic
+modules beside it), and only when a figure is made.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from firefleet.scenarios.schema import VoltageStep, WheelSpeedStep
+from firefleet.sim.metrics import Metrics
 from firefleet.sim.result import SimResult
 
 __all__ = ["figures"]
@@ -96,13 +101,15 @@ def _motor_response(result: SimResult) -> bytes:
     return _png(fig)
 
 
-def _transients(result: SimResult, metrics: dict[str, float]) -> bytes:
+def _transients(result: SimResult, metrics: Metrics) -> bytes:
     """Zoom on the speed step and the load step, with the 2 % band and the measured times."""
     scn = result.scenario
     cmd = scn.command
     assert isinstance(cmd, WheelSpeedStep)
     t = result.t
-    windows = [("speed step", cmd.start_s, metrics.get("settling_time_s"))]
+    windows: list[tuple[str, float, object]] = [
+        ("speed step", cmd.start_s, metrics.get("settling_time_s"))
+    ]
     if scn.load.torque_n_m != 0 and scn.load.start_s < t[-1]:
         windows.append(
             (
@@ -133,7 +140,7 @@ def _transients(result: SimResult, metrics: dict[str, float]) -> bytes:
             ms=3,
             label="actual",
         )
-        if settle is not None and np.isfinite(settle):
+        if isinstance(settle, float) and np.isfinite(settle):
             ax.axvline(t0 + settle, color="tab:red", ls=":", lw=1.2)
             ax.annotate(
                 f"in band for good\nafter {settle:.3f} s",
@@ -153,8 +160,11 @@ def _transients(result: SimResult, metrics: dict[str, float]) -> bytes:
     return _png(fig)
 
 
-def figures(result: SimResult, metrics: dict[str, float]) -> dict[str, bytes]:
+def figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
     """The figures of a run, as PNG bytes by file name."""
+    cmd = result.scenario.command
+    if not isinstance(cmd, VoltageStep | WheelSpeedStep):
+        raise ValueError(f"no figures for a {cmd.kind} scenario")
     out = {"response.png": _motor_response(result)}
     if isinstance(result.scenario.command, WheelSpeedStep):
         out["transients.png"] = _transients(result, metrics)

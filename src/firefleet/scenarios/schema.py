@@ -18,6 +18,7 @@ import json
 import math
 import types
 import typing
+from collections.abc import Sequence
 from dataclasses import field
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -64,6 +65,10 @@ class Claim:
         Relative tolerance of ``"~"``.
     source : str
         Where the claim comes from (the deliverable's section or the issue).
+    robot : int, optional
+        For a per-robot metric (a list in ``metrics.json``): the robot it is about,
+        numbered from 1 as the deliverable numbers them. Without it, a claim on a
+        per-robot metric must hold for every robot.
     """
 
     metric: str
@@ -71,12 +76,28 @@ class Claim:
     value: float
     rel_tol: float = 0.0
     source: str = ""
+    robot: int | None = None
 
     def __post_init__(self) -> None:
+        if self.robot is not None and self.robot < 1:
+            raise InputError(f"claim on {self.metric}: robot is numbered from 1, got {self.robot}")
         if self.op == "~" and not self.rel_tol > 0:
             raise InputError(f"claim on {self.metric}: op '~' needs rel_tol > 0")
         if self.op != "~" and self.rel_tol != 0:
             raise InputError(f"claim on {self.metric}: rel_tol is only for op '~'")
+
+    @property
+    def label(self) -> str:
+        """The metric as claimed, e.g. ``"wait_time_s"`` or ``"wait_time_s[robot 2]"``."""
+        return self.metric if self.robot is None else f"{self.metric}[robot {self.robot}]"
+
+    def select(self, measured: float | Sequence[float] | None) -> float | list[float] | None:
+        """The part of a metric's value this claim is about (the robot's entry, if any)."""
+        if self.robot is None or measured is None:
+            return None if measured is None else _plain(measured)
+        if isinstance(measured, int | float):
+            return None
+        return float(measured[self.robot - 1]) if self.robot <= len(measured) else None
 
     @property
     def expected(self) -> str:
@@ -85,8 +106,19 @@ class Claim:
             return f"{self.value:g} \u00b1 {100 * self.rel_tol:g}%"
         return f"{self.op} {self.value:g}"
 
-    def holds(self, measured: float | None) -> bool:
-        """Whether ``measured`` satisfies the claim (a missing or NaN value does not)."""
+    def holds(self, measured: float | Sequence[float] | None) -> bool:
+        """Whether the metric's value satisfies the claim.
+
+        ``measured`` is the whole metric (a number, or one number per robot); a missing
+        or NaN value does not satisfy any claim, and a per-robot list satisfies it only
+        if every robot's entry does (or the claimed robot's, with ``robot``).
+        """
+        value = self.select(measured)
+        if isinstance(value, list):
+            return bool(value) and all(self._holds_one(v) for v in value)
+        return self._holds_one(value)
+
+    def _holds_one(self, measured: float | None) -> bool:
         if measured is None or math.isnan(measured):
             return False
         if self.op == "~":
@@ -98,6 +130,10 @@ class Claim:
             ">=": measured >= self.value,
         }
         return bool(compare[self.op])
+
+
+def _plain(value: float | Sequence[float]) -> float | list[float]:
+    return float(value) if isinstance(value, int | float) else [float(v) for v in value]
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)

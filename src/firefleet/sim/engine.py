@@ -35,7 +35,7 @@ from firefleet.errors import InputError
 from firefleet.models.encoder import encoder_init, encoder_step
 from firefleet.models.kinematics import diff_drive_step
 from firefleet.models.motor import discretise_motor, motor_step
-from firefleet.scenarios.schema import Scenario, VoltageStep
+from firefleet.scenarios.schema import Scenario, VoltageStep, WheelSpeedStep
 from firefleet.sim.result import SimResult
 
 __all__ = ["SCALAR_MAX_ROBOTS", "ProgressCallback", "simulate"]
@@ -83,6 +83,21 @@ def simulate(
         raise InputError(f"record_every must be >= 1, got {record_every}")
     if backend not in ("auto", "array", "scalar"):
         raise InputError(f"backend must be 'auto', 'array' or 'scalar', got {backend!r}")
+    n_steps = scenario.n_steps
+    rec_steps = np.unique(np.r_[np.arange(0, n_steps + 1, record_every), n_steps])
+    cmd = scenario.command
+    if isinstance(cmd, VoltageStep | WheelSpeedStep):
+        return _simulate_motors(scenario, rec_steps, progress, backend)
+    raise InputError(f"no simulator for a {cmd.kind} scenario")
+
+
+def _simulate_motors(
+    scenario: Scenario,
+    rec_steps: NDArray[np.int64],
+    progress: ProgressCallback | None,
+    backend: Literal["auto", "array", "scalar"],
+) -> SimResult:
+    """A voltage-step or wheel-speed-step run: every wheel gets the same command."""
     rng = np.random.default_rng(scenario.seed)
     dt = scenario.dt_s
     n_steps = scenario.n_steps
@@ -90,7 +105,6 @@ def simulate(
     enc_params = scenario.encoder
     count_rad = 2.0 * np.pi / enc_params.counts_per_rev if enc_params.counts_per_rev else 0.0
     phase = rng.uniform(0.0, count_rad, size=(n, 2))
-    rec_steps = np.unique(np.r_[np.arange(0, n_steps + 1, record_every), n_steps])
     if backend == "scalar" or (backend == "auto" and n <= SCALAR_MAX_ROBOTS):
         return _simulate_scalar(scenario, phase, rec_steps, progress)
 
@@ -107,7 +121,7 @@ def simulate(
     pid = pid_init(measured)
 
     n_rec = rec_steps.size
-    t_rec = rec_steps * dt
+    t_rec = np.asarray(rec_steps * dt, dtype=np.float64)
     rec = {
         name: np.empty((n_rec, n, 2))
         for name in ("speed", "measured", "ref", "current", "voltage", "load")

@@ -13,12 +13,17 @@ from firefleet.scenarios.schema import Claim, VoltageStep, WheelSpeedStep
 from firefleet.sim.result import SimResult
 
 __all__ = [
+    "Metrics",
     "compute_metrics",
     "metrics_document",
     "recovery_time",
     "settling_time",
     "step_response_info",
 ]
+
+
+Metrics = dict[str, float | list[float]]
+"""Named numbers of a run: a float, or one float per robot (a list, robot 1 first)."""
 
 
 def _crossing(t: NDArray[np.float64], y: NDArray[np.float64], i: int, level: float) -> float:
@@ -124,8 +129,19 @@ def step_response_info(
     }
 
 
-def compute_metrics(result: SimResult) -> dict[str, float]:
-    """The scenario's metrics from a run (worst case over every wheel of the team).
+def compute_metrics(result: SimResult) -> Metrics:
+    """The scenario's metrics from a run, by the kind of its command.
+
+    The names each kind produces are ``firefleet.scenarios.schema.METRICS[kind]``.
+    """
+    cmd = result.scenario.command
+    if isinstance(cmd, VoltageStep | WheelSpeedStep):
+        return dict(_motor_metrics(result))
+    raise InputError(f"no metrics for a {cmd.kind} scenario")
+
+
+def _motor_metrics(result: SimResult) -> dict[str, float]:
+    """Metrics of a motor run (worst case over every wheel of the team).
 
     ``voltage-step``: ``steady_speed_rad_s`` and ``steady_current_a`` (mean over the last
     second, averaged over the wheels), ``peak_current_a``, ``time_constant_s`` (time to
@@ -182,17 +198,18 @@ def compute_metrics(result: SimResult) -> dict[str, float]:
 
 
 def metrics_document(
-    scenario_name: str, claims: tuple[Claim, ...], metrics: dict[str, float]
+    scenario_name: str, claims: tuple[Claim, ...], metrics: Metrics
 ) -> dict[str, Any]:
     """The ``metrics.json`` object: scenario name, checked claims, and the metrics.
 
-    Each claim is ``{"name", "expected", "measured", "passed", "source"}``.
+    Each claim is ``{"name", "expected", "measured", "passed", "source"}``; ``name`` is
+    the metric, with ``[robot k]`` for a claim on one robot of a per-robot metric.
     """
     checked = [
         {
-            "name": claim.metric,
+            "name": claim.label,
             "expected": claim.expected,
-            "measured": metrics.get(claim.metric),
+            "measured": claim.select(metrics.get(claim.metric)),
             "passed": claim.holds(metrics.get(claim.metric)),
             "source": claim.source,
         }

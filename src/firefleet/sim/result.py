@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,6 +40,12 @@ class SimResult:
         Motor voltages applied from that sample on [V].
     load_torque_n_m : ndarray, shape (T, N, 2)
         Load torques applied from that sample on [N m].
+    extra : mapping of str to ndarray
+        What the scenario's controller adds, by the name ``result.npz`` gives it, the
+        unit in the name's suffix, time first (for example ``y_err_m`` (T, N)).
+
+    Robots without wheels (point masses) have wheel arrays of shape (T, N, 0), and
+    ``result.npz`` leaves those out.
     """
 
     scenario: Scenario
@@ -50,18 +57,23 @@ class SimResult:
     current_a: FloatArray
     voltage_v: FloatArray
     load_torque_n_m: FloatArray
+    extra: Mapping[str, FloatArray] = field(default_factory=dict)
 
     def arrays(self) -> dict[str, FloatArray]:
         """The arrays by the names ``result.npz`` uses (``t``, ``pose``, and the rest)."""
-        return {
-            "t": self.t,
-            "pose": self.pose,
+        wheels = {
             "wheel_speed_rad_s": self.wheel_speed_rad_s,
             "wheel_speed_measured_rad_s": self.wheel_speed_measured_rad_s,
             "wheel_speed_ref_rad_s": self.wheel_speed_ref_rad_s,
             "current_a": self.current_a,
             "voltage_v": self.voltage_v,
             "load_torque_n_m": self.load_torque_n_m,
+        }
+        return {
+            "t": self.t,
+            "pose": self.pose,
+            **{name: a for name, a in wheels.items() if a.shape[-1] > 0},
+            **self.extra,
         }
 
     def to_npz_bytes(self) -> bytes:
