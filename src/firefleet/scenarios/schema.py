@@ -33,10 +33,12 @@ from firefleet.errors import InputError
 from firefleet.models.encoder import EncoderParams
 from firefleet.models.kinematics import RobotGeometry
 from firefleet.models.motor import MotorParams
+from firefleet.planning.paths import PolynomialPath
 
 __all__ = [
     "Claim",
     "LoadStep",
+    "PathFollowing",
     "Scenario",
     "VoltageStep",
     "WheelSpeedStep",
@@ -154,7 +156,48 @@ class WheelSpeedStep:
     start_s: float = 0.0
 
 
-Command = Annotated[VoltageStep | WheelSpeedStep, pydantic.Field(discriminator="kind")]
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class PathFollowing:
+    """Cooperative path following (section 2.6): each robot follows its own path.
+
+    Attributes
+    ----------
+    paths : tuple of PolynomialPath
+        One per robot, in the order of ``poses``: ``coefficients`` c0..c5 of
+        ``y = sum c_k x^k``, ``x_start_m``, ``x_end_m``.
+    trajectory_s : float
+        When every robot's last desired point falls due [s] (2.6.3).
+    pieces : int
+        Number of pieces every path is cut into (the same for the whole team).
+    arrival_radius_m : float
+        A robot has arrived when it is this close to its path's end [m].
+    controller_fis, lambda_fis : str
+        MATLAB ``.fis`` files of the main system and of the lambda correction; empty
+        for the built-in ones (``firefleet.control.path_following``).
+    """
+
+    kind: Literal["path-following"]
+    paths: tuple[PolynomialPath, ...]
+    trajectory_s: float
+    pieces: int = 200
+    arrival_radius_m: float = 0.05
+    controller_fis: str = ""
+    lambda_fis: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.paths:
+            raise InputError("paths: at least one path")
+        if not (math.isfinite(self.trajectory_s) and self.trajectory_s > 0):
+            raise InputError(f"trajectory_s must be > 0, got {self.trajectory_s}")
+        if self.pieces < 1:
+            raise InputError(f"pieces must be >= 1, got {self.pieces}")
+        if not (math.isfinite(self.arrival_radius_m) and self.arrival_radius_m > 0):
+            raise InputError(f"arrival_radius_m must be > 0, got {self.arrival_radius_m}")
+
+
+Command = Annotated[
+    VoltageStep | WheelSpeedStep | PathFollowing, pydantic.Field(discriminator="kind")
+]
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
@@ -179,6 +222,23 @@ METRICS: dict[str, tuple[str, ...]] = {
         "overshoot_pct",
         "steady_state_error_rad_s",
         "disturbance_recovery_s",
+        "peak_current_a",
+        "max_voltage_v",
+    ),
+    "path-following": (
+        "path_lengths_m",
+        "wait_time_s",
+        "capture_time_s",
+        "cross_track_rms_m",
+        "cross_track_rms_after_capture_m",
+        "cross_track_max_after_capture_m",
+        "final_position_error_m",
+        "arrival_time_s",
+        "arrival_spread_s",
+        "mean_speed_m_s",
+        "longest_path_speed_margin_m_s",
+        "sync_distance_m",
+        "odometry_drift_m",
         "peak_current_a",
         "max_voltage_v",
     ),
@@ -256,6 +316,17 @@ class Scenario:
             )
         if self.seed < 0:
             raise InputError(f"seed must be >= 0, got {self.seed}")
+        if isinstance(self.command, PathFollowing):
+            if len(self.command.paths) != self.n_robots:
+                raise InputError(
+                    f"command.paths: one path per robot, got {len(self.command.paths)} "
+                    f"paths for {self.n_robots} poses"
+                )
+            if self.command.trajectory_s > self.duration_s:
+                raise InputError(
+                    f"command.trajectory_s ({self.command.trajectory_s} s) is longer than "
+                    f"duration_s ({self.duration_s} s)"
+                )
         known = METRICS[self.command.kind]
         for claim in self.claims:
             if claim.metric not in known:

@@ -35,7 +35,8 @@ from firefleet.errors import InputError
 from firefleet.models.encoder import encoder_init, encoder_step
 from firefleet.models.kinematics import diff_drive_step
 from firefleet.models.motor import discretise_motor, motor_step
-from firefleet.scenarios.schema import Scenario, VoltageStep, WheelSpeedStep
+from firefleet.scenarios.schema import PathFollowing, Scenario, VoltageStep, WheelSpeedStep
+from firefleet.sim.cooperative import simulate_path_following
 from firefleet.sim.result import SimResult
 
 __all__ = ["SCALAR_MAX_ROBOTS", "ProgressCallback", "simulate"]
@@ -88,6 +89,8 @@ def simulate(
     cmd = scenario.command
     if isinstance(cmd, VoltageStep | WheelSpeedStep):
         return _simulate_motors(scenario, rec_steps, progress, backend)
+    if isinstance(cmd, PathFollowing):
+        return simulate_path_following(scenario, rec_steps, progress)
     raise InputError(f"no simulator for a {cmd.kind} scenario")
 
 
