@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from firefleet import builtin_names, load_scenario
 from firefleet.cli import main
 
 GOOD = """\
@@ -140,6 +141,10 @@ def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[s
         assert f'src="{name}/response.png"' in index
         assert (out / name / "response.png").is_file()
         assert (out / name / "metrics.json").is_file()
-    assert "6 of 6 claims passed" in index
+    total = sum(
+        len(load_scenario(n).claims) for n in builtin_names() if load_scenario(n).reproduces
+    )
+    assert total >= 25  # 6 motor claims, 19 path-following claims
+    assert f"{total} of {total} claims passed" in index
     assert "FAILED" not in index
     assert str((out / "index.html").resolve()) in capsys.readouterr().out

@@ -134,8 +134,8 @@ def compile_system(system: Any) -> FisTables:
 @numba.njit(cache=True)
 def membership_one(kind: int, p: FloatArray, x: float) -> float:  # pragma: no cover - jit
     """One membership degree, MATLAB's definitions (see ``firefleet.control.fuzzy``)."""
+    a, b, c, d = float(p[0]), float(p[1]), float(p[2]), float(p[3])
     if kind == 0:  # trimf [a b c]
-        a, b, c = p[0], p[1], p[2]
         if x == b:
             return 1.0
         if a < x < b:
@@ -144,17 +144,16 @@ def membership_one(kind: int, p: FloatArray, x: float) -> float:  # pragma: no c
             return (c - x) / (c - b)
         return 0.0
     if kind == 1:  # trapmf [a b c d]
-        a, b, c, d = p[0], p[1], p[2], p[3]
         y1 = 1.0 if x >= b else ((x - a) / (b - a) if x >= a and a != b else 0.0)
         y2 = 1.0 if x <= c else ((d - x) / (d - c) if x <= d and c != d else 0.0)
         return min(y1, y2)
     if kind == 2:  # gaussmf [sigma c]
-        return math.exp(-((x - p[1]) ** 2) / (2.0 * p[0] ** 2))
+        return math.exp(-((x - b) ** 2) / (2.0 * a**2))
     if kind == 3:  # gbellmf [a b c]
-        return 1.0 / (1.0 + abs((x - p[2]) / p[0]) ** (2.0 * p[1]))
+        ratio: float = abs((x - c) / a)
+        return 1.0 / (1.0 + math.pow(ratio, 2.0 * b))
     if kind == 4:  # sigmf [a c]
-        return 1.0 / (1.0 + math.exp(-p[0] * (x - p[1])))
-    a, b = p[0], p[1]
+        return 1.0 / (1.0 + math.exp(-a * (x - b)))
     if kind == 5:  # smf [a b]
         if a >= b:
             return 1.0 if x >= 0.5 * (a + b) else 0.0

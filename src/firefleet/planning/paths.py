@@ -72,9 +72,10 @@ class PolynomialPath:
         return np.asarray(npoly.polyval(np.asarray(x, dtype=np.float64), self._d1))
 
     def heading(self, x: ArrayLike) -> FloatArray:
-        """Direction of travel at ``x`` [rad], in (-pi, pi]: the tangent, exactly."""
+        """Direction of travel at ``x`` [rad], in [-pi, pi]: the tangent, exactly."""
         d = self.direction
-        return np.arctan2(d * self.slope(x), np.full_like(np.asarray(x, dtype=float), d))
+        along = np.full(np.shape(x), d, dtype=np.float64)
+        return np.asarray(np.arctan2(d * self.slope(x), along), dtype=np.float64)
 
     def curvature(self, x: ArrayLike) -> FloatArray:
         """Signed curvature ``y'' / (1 + y'^2)^(3/2)`` [1/m] (positive turning left
@@ -86,11 +87,11 @@ class PolynomialPath:
 
     @cached_property
     def _d1(self) -> FloatArray:
-        return npoly.polyder(np.asarray(self.coefficients, dtype=np.float64))
+        return np.asarray(npoly.polyder(np.asarray(self.coefficients)), dtype=np.float64)
 
     @cached_property
     def _d2(self) -> FloatArray:
-        return npoly.polyder(np.asarray(self.coefficients, dtype=np.float64), 2)
+        return np.asarray(npoly.polyder(np.asarray(self.coefficients), 2), dtype=np.float64)
 
     def _speed(self, x: FloatArray) -> FloatArray:
         """``ds/dx = sqrt(1 + y'^2)``."""

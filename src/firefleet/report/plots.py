@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from firefleet.scenarios.schema import VoltageStep, WheelSpeedStep
+from firefleet.scenarios.schema import PathFollowing, VoltageStep, WheelSpeedStep
 from firefleet.sim.metrics import Metrics
 from firefleet.sim.result import SimResult
 
@@ -163,6 +163,10 @@ def _transients(result: SimResult, metrics: Metrics) -> bytes:
 def figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
     """The figures of a run, as PNG bytes by file name."""
     cmd = result.scenario.command
+    if isinstance(cmd, PathFollowing):
+        from firefleet.report import path_following
+
+        return path_following.figures(result)
     if not isinstance(cmd, VoltageStep | WheelSpeedStep):
         raise ValueError(f"no figures for a {cmd.kind} scenario")
     out = {"response.png": _motor_response(result)}

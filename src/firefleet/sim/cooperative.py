@@ -19,6 +19,7 @@ the common release schedule, so a team run equals its robots run one by one.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numba
@@ -94,8 +95,15 @@ def simulate_path_following(
     motor = np.r_[disc.ad.ravel(), disc.bd.ravel(), disc.c_ad, disc.c_bd]
     g = scenario.speed_pid
     pid = np.array(
-        [g.kp, g.ki, g.kd, g.derivative_filter_s, g.setpoint_weight, g.tracking_time_s]
-        + [g.output_limit]
+        [
+            g.kp,
+            g.ki,
+            g.kd,
+            g.derivative_filter_s,
+            g.setpoint_weight,
+            g.tracking_time_s,
+            g.output_limit,
+        ]
     )
     geom = np.array([scenario.robot.wheel_radius_m, scenario.robot.axle_length_m])
     load = np.array([scenario.load.torque_n_m, scenario.load.start_s])
@@ -122,7 +130,7 @@ def simulate_path_following(
     rec_index[rec_steps] = np.arange(n_rec)
 
     bounds = np.unique(np.linspace(0, n_steps + 1, _CHUNKS + 1).astype(np.int64))
-    for k0, k1 in zip(bounds[:-1], bounds[1:], strict=True):
+    for k0, k1 in itertools.pairwise(bounds):
         _run(
             int(k0),
             int(k1),
@@ -265,7 +273,7 @@ def _run(
     dmeas = np.empty(2)
     for k in range(k0, k1):
         t = k * dt
-        j = int(math.floor(t / period + 1e-9)) + 1
+        j = math.floor(t / period + 1e-9) + 1
         tau = load[0] if t >= load[1] - 1e-9 else 0.0
         row = rec_index[k]
         for i in range(n):

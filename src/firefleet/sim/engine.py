@@ -101,6 +101,7 @@ def _simulate_motors(
     backend: Literal["auto", "array", "scalar"],
 ) -> SimResult:
     """A voltage-step or wheel-speed-step run: every wheel gets the same command."""
+    assert isinstance(scenario.command, VoltageStep | WheelSpeedStep)
     rng = np.random.default_rng(scenario.seed)
     dt = scenario.dt_s
     n_steps = scenario.n_steps
@@ -188,6 +189,7 @@ def _simulate_scalar(
     Mirrors, operation for operation, ``pid_step``, ``motor_step``, ``diff_drive_step``
     and ``encoder_step`` as the array backend calls them.
     """
+    assert isinstance(scenario.command, VoltageStep | WheelSpeedStep)
     dt = scenario.dt_s
     n_steps = scenario.n_steps
     n = scenario.n_robots
