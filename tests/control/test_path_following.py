@@ -69,7 +69,7 @@ def test_compiled_evaluation_equals_the_reference_engine() -> None:
     tables = compile_system(CTL.main)
     out = np.empty(2)
     for k in range(x.shape[0]):
-        eval_one(x[k], *tables, out)
+        eval_one(x[k], *tables, out, np.empty(64))
         np.testing.assert_allclose(out, ref[k], rtol=0, atol=1e-12)
 
 

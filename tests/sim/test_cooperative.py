@@ -89,3 +89,23 @@ def test_path_count_must_match_the_team() -> None:
     data["command"]["trajectory_s"] = 9.0  # type: ignore[index]
     with pytest.raises(InputError, match="longer than duration_s"):
         parse_scenario(data)
+
+
+def test_parallel_kernel_equals_serial(monkeypatch: pytest.MonkeyPatch) -> None:
+    from firefleet.sim import cooperative
+
+    base = load_scenario("coop-different-paths")
+    cmd = base.command
+    assert isinstance(cmd, PathFollowing)
+    big = dataclasses.replace(
+        base,
+        poses=base.poses * 22,
+        command=dataclasses.replace(cmd, paths=cmd.paths * 22, trajectory_s=10.0),
+        duration_s=10.0,
+    )
+    assert big.n_robots >= cooperative.PARALLEL_MIN_ROBOTS
+    parallel = simulate(big).arrays()
+    monkeypatch.setattr(cooperative, "PARALLEL_MIN_ROBOTS", 10**9)
+    serial = simulate(big).arrays()
+    for key in parallel:
+        np.testing.assert_array_equal(parallel[key], serial[key], err_msg=key)

@@ -192,18 +192,27 @@ def eval_one(
     out_mid: FloatArray,
     flags: IntArray,
     out: FloatArray,
+    work: FloatArray,
 ) -> None:  # pragma: no cover - jit
-    """Evaluate one sample ``x`` (n_in,) into ``out`` (n_out,); the tables' fields in order."""
+    """Evaluate one sample ``x`` (n_in,) into ``out`` (n_out,); the tables' fields in order.
+
+    ``work`` is scratch space of at least ``n_in + M + 2 n_out`` floats (no allocation
+    inside the hot loop).
+    """
     n_in = x.shape[0]
-    xc = np.empty(n_in)
+    n_mf = mf_kind.shape[0]
+    n_out = out.shape[0]
+    xc = work[:n_in]
+    mu = work[n_in : n_in + n_mf]
+    num = work[n_in + n_mf : n_in + n_mf + n_out]
+    den = work[n_in + n_mf + n_out : n_in + n_mf + 2 * n_out]
     for i in range(n_in):
         xc[i] = min(max(x[i], in_range[i, 0]), in_range[i, 1])
-    mu = np.empty(mf_kind.shape[0])
-    for m in range(mf_kind.shape[0]):
+    for m in range(n_mf):
         mu[m] = membership_one(mf_kind[m], mf_params[m], xc[mf_input[m]])
-    n_out = out.shape[0]
-    num = np.zeros(n_out)
-    den = np.zeros(n_out)
+    for o in range(n_out):
+        num[o] = 0.0
+        den[o] = 0.0
     for r in range(rule_mf.shape[0]):
         is_or = rule_or[r]
         w = 0.0 if is_or else 1.0

@@ -49,6 +49,10 @@ CONTROL_SERIES = (
 )
 """Controller quantities recorded each sample, (T, N) each, in this order."""
 
+PARALLEL_MIN_ROBOTS = 64
+"""Teams at least this large run their robots on every core (they are independent, so
+the result is the same bit for bit); smaller ones on one, where threads cost more than
+they bring."""
 _CHUNKS = 100
 """The kernel runs in this many pieces, so a progress bar can move."""
 
@@ -131,7 +135,8 @@ def simulate_path_following(
 
     bounds = np.unique(np.linspace(0, n_steps + 1, _CHUNKS + 1).astype(np.int64))
     for k0, k1 in itertools.pairwise(bounds):
-        _run(
+        kernel = _run_parallel if n >= PARALLEL_MIN_ROBOTS else _run
+        kernel(
             int(k0),
             int(k1),
             n_steps,
@@ -199,8 +204,7 @@ def _arc(pose: FloatArray, i: int, dr: float, dl: float, r: float, axle: float) 
     pose[i, 2] = _wrap(th + dth)
 
 
-@numba.njit(cache=True)
-def _run(
+def _run_py(
     k0: int,
     k1: int,
     n_steps: int,
@@ -261,22 +265,23 @@ def _run(
     speed_scale = (2.0 * math.pi / cpr if cpr > 0 else 1.0) / (window * dt)
     count_rad = 2.0 * math.pi / cpr if cpr > 0 else 1.0
     arrived = np.zeros(n, dtype=np.bool_)
-    for i in range(n):
-        arrived[i] = done[i] > 0.0
-    x_main = np.empty(3)
-    y_main = np.empty(2)
-    x_lam = np.empty(1)
-    y_lam = np.empty(1)
-    ref = np.empty(2)
-    volt = np.empty(2)
-    dphi = np.empty(2)
-    dmeas = np.empty(2)
-    for k in range(k0, k1):
-        t = k * dt
-        j = math.floor(t / period + 1e-9) + 1
-        tau = load[0] if t >= load[1] - 1e-9 else 0.0
-        row = rec_index[k]
-        for i in range(n):
+    for q in range(n):
+        arrived[q] = done[q] > 0.0
+    for i in numba.prange(n):  # robots are independent: each runs the whole chunk in turn
+        work = np.empty(64 + m_kind.shape[0] + l_kind.shape[0])
+        x_main = np.empty(3)
+        y_main = np.empty(2)
+        x_lam = np.empty(1)
+        y_lam = np.empty(1)
+        ref = np.empty(2)
+        volt = np.empty(2)
+        dphi = np.empty(2)
+        dmeas = np.empty(2)
+        for k in range(k0, k1):
+            t = k * dt
+            j = math.floor(t / period + 1e-9) + 1
+            tau = load[0] if t >= load[1] - 1e-9 else 0.0
+            row = rec_index[k]
             # --- high level: the fuzzy controller on the odometry pose (eqs. 9-11)
             x_end, y_end, h_end = points[i, pieces, 0], points[i, pieces, 1], points[i, pieces, 2]
             if j <= pieces:
@@ -309,6 +314,7 @@ def _run(
                 l_mid,
                 l_flags,
                 y_lam,
+                work,
             )
             lam_deg = y_lam[0]
             x_main[0] = d_rp
@@ -329,6 +335,7 @@ def _run(
                 m_mid,
                 m_flags,
                 y_main,
+                work,
             )
             past_end = (x_end - odom[i, 0]) * math.cos(h_end) + (y_end - odom[i, 1]) * math.sin(
                 h_end
@@ -389,6 +396,10 @@ def _run(
                 wheel[i, w, 7] = count
             _arc(pose, i, dphi[0], dphi[1], r, axle)
             _arc(odom, i, dmeas[0], dmeas[1], r, axle)
+
+
+_run = numba.njit(cache=True)(_run_py)
+_run_parallel = numba.njit(cache=True, parallel=True)(_run_py)
 
 
 _MOVING_M_S = 0.01
