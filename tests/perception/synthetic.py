@@ -87,7 +87,9 @@ def render(
     shape = undistorted_grid.shape[:2]
     mx = tx[:, 0].reshape(shape).astype(np.float32)
     my = tx[:, 1].reshape(shape).astype(np.float32)
-    img = cv2.remap(texture, mx, my, cv2.INTER_AREA, borderMode=cv2.BORDER_CONSTANT, borderValue=128)
+    img = cv2.remap(
+        texture, mx, my, cv2.INTER_AREA, borderMode=cv2.BORDER_CONSTANT, borderValue=128
+    )
     return np.asarray(img, dtype=np.uint8)
 
 
@@ -109,7 +111,9 @@ def board_poses(n: int, rng: np.random.Generator) -> list[tuple[FloatArray, Floa
     for _ in range(n):
         rvec = rng.uniform(-0.45, 0.45, 3) * np.array([1.0, 1.0, 0.4])
         rot, _ = cv2.Rodrigues(rvec)
-        centre = np.array([rng.uniform(-0.1, 0.04), rng.uniform(-0.06, 0.06), rng.uniform(0.5, 0.8)])
+        centre = np.array(
+            [rng.uniform(-0.1, 0.04), rng.uniform(-0.06, 0.06), rng.uniform(0.5, 0.8)]
+        )
         trans = centre - rot @ np.array([width / 2, height / 2, 0.0])
         poses.append((np.asarray(rot), trans))
     return poses

@@ -608,13 +608,13 @@ def rectify_uncalibrated(
     Interest points are matched (:func:`match_features`), the fundamental matrix is
     estimated with RANSAC, and projective transforms ``H1``, ``H2`` that send the
     epipoles to infinity along the rows are found (Hartley [2]_,
-    ``cv2.stereoRectifyUncalibrated``). Two corrections follow, each a transform that
-    keeps rows aligned: ``H1`` and ``H2`` are composed with a common projective map
-    chosen so that the left image's corners stay where they were as far as an affinity
-    of rows allows (no image is sent off-frame), and the right image is shifted along
-    the rows so that matched disparities start near zero. If the matched points end up
-    with negative disparities (the transforms swapped the sides), both transforms are
-    mirrored left to right together, which makes them positive.
+    ``cv2.stereoRectifyUncalibrated``). Corrections follow, each keeping rows aligned:
+    a transform that mirrors an image is composed with a mirror (Hartley's transforms
+    are defined up to one); both are composed with a common affinity that maps rows to
+    rows, fitted so that the left image's corners stay where they were (no image is
+    sent off-frame); and the right image is shifted along the rows so that the
+    matched points' disparities start a margin above zero (Hartley's matching
+    transform centres them on zero).
 
     Returns
     -------
@@ -652,6 +652,17 @@ def rectify_uncalibrated(
         raise InputError("uncalibrated rectification failed (degenerate geometry)")
     H1: FloatArray = np.asarray(h1_raw, dtype=np.float64)
     H2: FloatArray = np.asarray(h2_raw, dtype=np.float64)
+    # Hartley's transforms are defined up to a mirror of each image along the rows and
+    # a common mirror across them: undo any, so neither image is shown mirrored.
+    centre = np.array([[(w - 1) / 2.0, (hgt - 1) / 2.0]])
+    step = centre + np.array([[1.0, 0.0], [0.0, 1.0]])
+    flip_x = np.diag([-1.0, 1.0, 1.0])
+    if (_apply_h(H1, step[:1]) - _apply_h(H1, centre))[0, 0] < 0:
+        H1 = flip_x @ H1
+    if (_apply_h(H2, step[:1]) - _apply_h(H2, centre))[0, 0] < 0:
+        H2 = flip_x @ H2
+    if (_apply_h(H1, step[1:]) - _apply_h(H1, centre))[0, 1] < 0:
+        H1, H2 = np.diag([1.0, -1.0, 1.0]) @ H1, np.diag([1.0, -1.0, 1.0]) @ H2
     # Keep the rectified left image in frame: an affine map of the rectified plane that
     # is the same for both images and keeps rows rows (x' = a x + b y + c, y' = e y + f)
     # fitted so that the left image's corners land near their original positions.
@@ -660,14 +671,10 @@ def rectify_uncalibrated(
     ax, *_ = np.linalg.lstsq(np.column_stack([rc, np.ones(4)]), corners[:, 0], rcond=None)
     ay, *_ = np.linalg.lstsq(np.column_stack([rc[:, 1], np.ones(4)]), corners[:, 1], rcond=None)
     A = np.array([[ax[0], ax[1], ax[2]], [0.0, ay[0], ay[1]], [0.0, 0.0, 1.0]])
-    if A[0, 0] < 0:  # mirrored: flip both about the image centre to keep orientation
-        A = np.array([[-1.0, 0.0, w - 1.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]) @ A
     H1, H2 = A @ H1, A @ H2
     disp = _apply_h(H1, pl)[:, 0] - _apply_h(H2, pr)[:, 0]
-    if np.median(disp) < 0:  # the pair is the other way round: mirror both
-        M = np.array([[-1.0, 0.0, w - 1.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-        H1, H2 = M @ H1, M @ H2
-        disp = -disp
+    # Hartley's matching transform centres the disparities on zero; the shift below
+    # moves them into SGBM's non-negative range (relative depth order is kept).
     lo, hi = np.percentile(disp, [1.0, 99.0])
     span = hi - lo
     margin = max(8.0, 0.25 * span)
@@ -1273,6 +1280,15 @@ def process_pair(
     else:
         raise InputError(f"mode must be calibrated, uncalibrated or rectified, got {mode!r}")
     result = compute_disparity(rl, rr, min_disparity=lo, num_disparities=num)
+    if mode != "rectified":  # no value where the rectified left image has no source
+        mx, my = rect.map_left[..., 0], rect.map_left[..., 1]
+        outside = ~((mx >= 0) & (mx <= w - 1) & (my >= 0) & (my <= h - 1))
+        if outside.any():
+            disparity = result.disparity.copy()
+            disparity[outside] = np.nan
+            measured = result.measured & ~outside
+            confidence = np.where(outside, np.float32(0.0), result.confidence)
+            result = DisparityResult(disparity, measured, confidence)
     d = result.disparity
     finite = d[np.isfinite(d)]
     summary.update(
