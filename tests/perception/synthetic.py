@@ -99,7 +99,7 @@ def ideal_grid(k: FloatArray, dist: FloatArray) -> FloatArray:
     xs, ys = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
     pts = np.column_stack([xs.ravel(), ys.ravel()]).reshape(-1, 1, 2)
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10)
-    und = cv2.undistortPointsIter(pts, k, dist, None, k, crit)
+    und = cv2.undistortPointsIter(pts, k, dist, np.eye(3), k, crit)
     return np.asarray(und, dtype=np.float64).reshape(h, w, 2)
 
 

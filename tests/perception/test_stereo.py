@@ -39,7 +39,7 @@ def chessboards() -> tuple[Rig, list[Image], list[Image], st.StereoCalibration]:
 
 @pytest.fixture(scope="module")
 def motorcycle() -> tuple[Image, Image, NDArray[np.float32]]:
-    left, right, gt = skimage.data.stereo_motorcycle()
+    left, right, gt = skimage.data.stereo_motorcycle()  # type: ignore[no-untyped-call]
     return (
         np.ascontiguousarray(left[..., ::-1]),  # RGB -> BGR, as cv2.imread gives
         np.ascontiguousarray(right[..., ::-1]),
@@ -232,7 +232,7 @@ def layered_pair(
     right[y0 : y0 + 60, xr : xr + 70] = front
     gt = np.full((h, w), d_back, np.float32)
     gt[y0 : y0 + 60, x0 : x0 + 70] = d_front
-    return left, right, gt
+    return np.asarray(left, np.uint8), np.asarray(right, np.uint8), gt
 
 
 def test_disparity_of_layers_with_occlusion_filled_from_the_background() -> None:

@@ -99,6 +99,7 @@ def test_stereo_calibrated_pair(tmp_path: Path) -> None:
     depths = [float(c[2]) for c in corners]
     assert min(depths) < summary["depth_median_m"] < max(depths)
     left_rect = cv2.imread(str(out / "rectified_left.png"), cv2.IMREAD_UNCHANGED)
+    assert left_rect is not None
     assert left_rect.shape == (480, 640)
 
 
