@@ -188,6 +188,8 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     if args.calib is None and not (args.uncalibrated or args.rectified):
         raise InputError("stereo: give --calib FILE, --uncalibrated or --rectified")
+    if args.rectified and args.uncalibrated:
+        raise InputError("stereo: --rectified and --uncalibrated exclude each other")
     if (args.focal_px is None) != (args.baseline_m is None):
         raise InputError("stereo: --focal-px and --baseline-m go together")
     calib = stereo.load_calibration(args.calib) if args.calib else None

@@ -40,6 +40,7 @@ def test_stereo_rectified_pair_writes_consistent_outputs(
             "disparity.npy",
             "confidence.npy",
             "disparity.png",
+            "rectified_pair.png",
             "depth.npy",
             "cloud.ply",
             "scan.json",
@@ -131,6 +132,9 @@ def test_stereo_bad_input_exits_2_and_writes_nothing(
     assert "calibration is for 640 x 480 px images, these are 240 x 160" in _one_error_line(capsys)
     assert main(["stereo", str(pair[0]), str(pair[1]), "--out", str(out)]) == 2
     assert "--calib FILE, --uncalibrated or --rectified" in _one_error_line(capsys)
+    both = ["--rectified", "--uncalibrated", "--out", str(out)]
+    assert main(["stereo", str(pair[0]), str(pair[1]), *both]) == 2
+    assert "exclude each other" in _one_error_line(capsys)
     assert main(["stereo", str(pair[0]), str(tmp_path / "none.png"), "--rectified"]) == 2
     assert "none.png: no such image file" in _one_error_line(capsys)
     assert not out.exists()

@@ -1349,12 +1349,13 @@ def write_run(run: StereoRun, folder: Path) -> list[str]:
     """Write a :class:`StereoRun`'s files into ``folder``; returns their names.
 
     ``rectified_left.png``, ``rectified_right.png``, ``disparity.npy`` (float32 [px],
-    NaN where none), ``disparity.png``, ``confidence.npy``; with metric geometry also
+    NaN where none), ``disparity.png``, ``confidence.npy``, ``rectified_pair.png`` (the
+    pair side by side with rows drawn, to check the rectification by eye); with metric geometry also
     ``depth.npy`` (float32 [m], NaN where none), ``cloud.ply`` and ``scan.json``.
     ``summary.json`` is written by the caller (it may add to it).
     """
     from firefleet.outputs import json_text
-    from firefleet.report.stereo import disparity_png
+    from firefleet.report.stereo import disparity_png, rectified_pair_png
 
     folder.mkdir(parents=True, exist_ok=True)
     names = []
@@ -1370,7 +1371,8 @@ def write_run(run: StereoRun, folder: Path) -> list[str]:
     np.save(folder / "disparity.npy", run.result.disparity.astype(np.float32))
     np.save(folder / "confidence.npy", run.result.confidence.astype(np.float32))
     (folder / "disparity.png").write_bytes(disparity_png(run.result.disparity))
-    names += ["disparity.npy", "confidence.npy", "disparity.png"]
+    (folder / "rectified_pair.png").write_bytes(rectified_pair_png(run.rect_left, run.rect_right))
+    names += ["disparity.npy", "confidence.npy", "disparity.png", "rectified_pair.png"]
     if run.depth_m is not None and run.scan is not None:
         np.save(folder / "depth.npy", run.depth_m.astype(np.float32))
         (folder / "cloud.ply").write_bytes(ply_bytes(run.points, run.colors))
