@@ -64,7 +64,7 @@ def run(console: Console) -> dict[str, Any]:
     small_s = _best(base, repeats=7, record_every=1)
     big = large_team(base, LARGE_N, LARGE_DURATION_S)
     large_s = _best(big, repeats=3, record_every=10)
-    rows = [
+    rows: list[dict[str, Any]] = [
         {
             "case": "coop-different-paths (3 robots)",
             "simulated_s": base.duration_s,

@@ -6,6 +6,8 @@
     firefleet run SCENARIO [--out DIR] [--seed N] [--no-plots]
     firefleet validate FILE...
     firefleet reproduce [--out DIR]
+    firefleet stereo LEFT RIGHT [--calib FILE | --uncalibrated | --rectified] [--out DIR]
+    firefleet capture LEFT RIGHT --out DIR [--frames N] [--offset K] [--every K]
 
 Bad input (an unknown scenario, a malformed file, a bad value) is one line per problem
 on stderr and exit status 2, with nothing written. A run whose claims do not all hold
@@ -187,6 +189,113 @@ def _figure_number(label: str) -> tuple[int, str]:
     return (int(digits[0]) if digits else 10**6, label)
 
 
+# ------------------------------------------------------------ stereo and capture
+
+
+def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from firefleet.perception import stereo
+
+    if args.calib is None and not (args.uncalibrated or args.rectified):
+        raise InputError("stereo: give --calib FILE, --uncalibrated or --rectified")
+    if args.rectified and args.uncalibrated:
+        raise InputError("stereo: --rectified and --uncalibrated exclude each other")
+    if (args.focal_px is None) != (args.baseline_m is None):
+        raise InputError("stereo: --focal-px and --baseline-m go together")
+    calib = stereo.load_calibration(args.calib) if args.calib else None
+    left, right = stereo.read_image(args.left), stereo.read_image(args.right)
+    mode = "rectified" if args.rectified else "uncalibrated" if args.uncalibrated else "calibrated"
+    run = stereo.process_pair(
+        left,
+        right,
+        calib=calib,
+        mode=mode,
+        focal_px=args.focal_px,
+        baseline_m=args.baseline_m,
+        doffs_px=args.doffs_px,
+        min_disparity=args.min_disparity,
+        num_disparities=args.num_disparities,
+        n_sectors=args.sectors,
+    )
+    summary = {"left": str(args.left), "right": str(args.right), **run.summary}
+    dest = Path(args.out)
+    with staged_dir(dest) as stage:
+        names = stereo.write_run(run, stage)
+        (stage / "summary.json").write_text(json_text(summary), encoding="utf-8")
+    table = Table(title=f"stereo ({mode})")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    for key, value in summary.items():
+        if isinstance(value, float):
+            table.add_row(key, f"{value:.6g}")
+        elif isinstance(value, int):
+            table.add_row(key, str(value))
+    out.print(table)
+    out.print(f"wrote {dest}/: {', '.join([*names, 'summary.json'])}", markup=False)
+    return EXIT_OK
+
+
+def _cmd_capture(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from firefleet.perception.capture import stereo_capture
+
+    dest = Path(args.out)
+    with staged_dir(dest) as stage, _progress_bar(err, "capture") as progress:
+        rows = stereo_capture(
+            args.left,
+            args.right,
+            stage,
+            n_frames=args.frames,
+            offset_frames=args.offset,
+            every=args.every,
+            width=args.width,
+            height=args.height,
+            progress=progress,
+        )
+    skew = max(abs(r["skew_s"]) for r in rows)
+    out.print(
+        f"wrote {len(rows)} pair(s) and timestamps.csv to {dest}/ (max skew {skew * 1e3:.1f} ms)",
+        markup=False,
+        highlight=False,
+    )
+    return EXIT_OK
+
+
+def _add_stereo_parsers(sub: Any) -> None:
+    st = sub.add_parser(
+        "stereo", help="rectify a stereo pair; disparity, depth, point cloud and range scan"
+    )
+    st.add_argument("left", metavar="LEFT", help="left image file")
+    st.add_argument("right", metavar="RIGHT", help="right image file")
+    how = st.add_mutually_exclusive_group()
+    how.add_argument("--calib", metavar="FILE", help="calibration YAML: calibrated rectification")
+    how.add_argument(
+        "--uncalibrated", action="store_true", help="rectify from matched interest points"
+    )
+    st.add_argument(
+        "--rectified",
+        action="store_true",
+        help="the pair is already rectified (with --calib: by it)",
+    )
+    st.add_argument("--focal-px", type=float, help="rectified focal length [px] (with --rectified)")
+    st.add_argument("--baseline-m", type=float, help="baseline [m] (with --rectified)")
+    st.add_argument("--doffs-px", type=float, default=0.0, help="cx_right - cx_left [px]")
+    st.add_argument("--min-disparity", type=int, default=0, metavar="PX")
+    st.add_argument("--num-disparities", type=int, default=64, metavar="N", help="multiple of 16")
+    st.add_argument("--sectors", type=int, default=32, metavar="K", help="range-scan sectors")
+    st.add_argument("--out", metavar="DIR", default="stereo-out", help="output folder")
+    cap = sub.add_parser("capture", help="frame-synchronised pairs from two cameras or videos")
+    cap.add_argument("left", metavar="LEFT", help="/dev/videoN, a camera index, or a video file")
+    cap.add_argument("right", metavar="RIGHT", help="/dev/videoN, a camera index, or a video file")
+    cap.add_argument("--out", metavar="DIR", required=True, help="output folder")
+    cap.add_argument("--frames", type=int, default=1, metavar="N", help="pairs to save")
+    cap.add_argument("--offset", type=int, default=0, metavar="K", help="skip K right frames")
+    cap.add_argument("--every", type=int, default=1, metavar="K", help="keep every K-th pair")
+    cap.add_argument("--width", type=int, help="camera width [px]")
+    cap.add_argument("--height", type=int, help="camera height [px]")
+
+
+# ------------------------------------------------------------------------------
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="firefleet",
@@ -205,6 +314,7 @@ def _parser() -> argparse.ArgumentParser:
     validate.add_argument("files", nargs="+", metavar="FILE")
     reproduce = sub.add_parser("reproduce", help="run every experiment of the deliverable")
     reproduce.add_argument("--out", metavar="DIR", default="firefleet-report", help="report folder")
+    _add_stereo_parsers(sub)
     return parser
 
 
@@ -213,6 +323,8 @@ _COMMANDS = {
     "run": _cmd_run,
     "validate": _cmd_validate,
     "reproduce": _cmd_reproduce,
+    "stereo": _cmd_stereo,
+    "capture": _cmd_capture,
 }
 
 

@@ -1,0 +1,1 @@
+"""Perception: stereo depth (:mod:`.stereo`) and stereo capture (:mod:`.capture`)."""

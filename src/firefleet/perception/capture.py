@@ -1,0 +1,273 @@
+"""Frame-synchronised stereo capture from two cameras or two video files.
+
+This replaces the deliverable's ``motion`` and ``fswebcam`` set-up (Annexure A), where
+each webcam was read by its own process (``fswebcam -d /dev/video0``, then
+``/dev/video1``) and the two pictures were taken at different moments. Here both
+sources are read by one loop: each step first *grabs* a frame from both (a cheap call
+that latches the frame), then *retrieves* (decodes) them, so the two exposures are as
+close in time as the drivers allow, and each frame keeps its timestamp.
+
+Sources are camera devices (``/dev/video0`` or an index ``0``) or video files. Video
+files are synchronised by frame number; ``offset_frames`` drops that many frames from
+the right source first (two recordings started at different moments, or one file
+opened twice to make a shifted pair).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import logging
+import re
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from firefleet.errors import InputError
+
+__all__ = ["StereoFrame", "open_source", "read_pairs", "save_pairs", "stereo_capture"]
+
+log = logging.getLogger(__name__)
+
+_DEVICE = re.compile(r"^(?:/dev/video)?(\d+)$")
+
+
+@dataclass(frozen=True, eq=False)
+class StereoFrame:
+    """One synchronised pair.
+
+    Attributes
+    ----------
+    index : int
+        Pair number, from 0.
+    t_left_s, t_right_s : float
+        Timestamps [s]: the position in the video for files, the monotonic clock at the
+        grab for cameras.
+    left, right : ndarray of uint8, shape (H, W, 3)
+        BGR frames.
+    """
+
+    index: int
+    t_left_s: float
+    t_right_s: float
+    left: NDArray[np.uint8]
+    right: NDArray[np.uint8]
+
+    @property
+    def skew_s(self) -> float:
+        """``t_right_s - t_left_s`` [s] (for files, relative to the start of each file)."""
+        return self.t_right_s - self.t_left_s
+
+
+def _is_device(spec: str) -> bool:
+    return _DEVICE.match(spec) is not None
+
+
+def open_source(
+    spec: str, *, width: int | None = None, height: int | None = None
+) -> cv2.VideoCapture:
+    """Open a camera (``/dev/videoN`` or ``N``) or a video file.
+
+    Parameters
+    ----------
+    spec : str
+        Device path, device index, or video file path.
+    width, height : int, optional
+        Requested camera resolution [px] (cameras only; the deliverable's webcams give
+        640 x 480).
+
+    Raises
+    ------
+    InputError
+        Naming ``spec`` if it cannot be opened (no such device or file, busy device,
+        undecodable file).
+    """
+    m = _DEVICE.match(spec)
+    if m is not None:
+        cap = cv2.VideoCapture(int(m.group(1)))
+        if not cap.isOpened():
+            raise InputError(f"camera {spec}: cannot be opened (no such device, or busy)")
+        if width is not None:
+            cap.set(cv2.CAP_PROP_FRAME_WIDTH, width)
+        if height is not None:
+            cap.set(cv2.CAP_PROP_FRAME_HEIGHT, height)
+        return cap
+    path = Path(spec)
+    if not path.is_file():
+        raise InputError(f"video {spec}: no such file")
+    cap = cv2.VideoCapture(str(path))
+    if not cap.isOpened():
+        raise InputError(f"video {spec}: cannot be opened (not a video OpenCV can decode)")
+    return cap
+
+
+def _frame_time_s(cap: cv2.VideoCapture, device: bool) -> float:
+    return time.monotonic() if device else float(cap.get(cv2.CAP_PROP_POS_MSEC)) / 1000.0
+
+
+def read_pairs(
+    left: cv2.VideoCapture,
+    right: cv2.VideoCapture,
+    *,
+    n_frames: int,
+    offset_frames: int = 0,
+    every: int = 1,
+    devices: tuple[bool, bool] = (False, False),
+) -> Iterator[StereoFrame]:
+    """Yield synchronised pairs: grab both, then retrieve both.
+
+    Parameters
+    ----------
+    left, right : cv2.VideoCapture
+        Open sources (:func:`open_source`).
+    n_frames : int
+        Pairs to yield; fewer if a source ends first.
+    offset_frames : int
+        Frames dropped from the right source before the first pair (>= 0).
+    every : int
+        Keep every ``every``-th pair (>= 1).
+    devices : tuple of bool
+        Whether each source is a live camera (timestamps from the clock) or a file.
+
+    Raises
+    ------
+    InputError
+        If a frame cannot be decoded, or the two sources give frames of different
+        sizes.
+    """
+    if n_frames < 1 or offset_frames < 0 or every < 1:
+        raise InputError(
+            f"need n_frames >= 1, offset_frames >= 0, every >= 1; got {n_frames}, "
+            f"{offset_frames}, {every}"
+        )
+    for _ in range(offset_frames):
+        if not right.grab():
+            return
+    k = 0
+    produced = 0
+    while produced < n_frames:
+        ok_l = left.grab()
+        t_l = _frame_time_s(left, devices[0])
+        ok_r = right.grab()
+        t_r = _frame_time_s(right, devices[1])
+        if not (ok_l and ok_r):
+            return
+        k += 1
+        if (k - 1) % every:
+            continue
+        got_l, img_l = left.retrieve()
+        got_r, img_r = right.retrieve()
+        if not (got_l and got_r) or img_l is None or img_r is None:
+            raise InputError(f"pair {produced}: a frame could not be decoded")
+        if img_l.shape != img_r.shape:
+            raise InputError(
+                f"the sources give frames of different sizes: {img_l.shape[1]} x "
+                f"{img_l.shape[0]} vs {img_r.shape[1]} x {img_r.shape[0]} px"
+            )
+        yield StereoFrame(produced, t_l, t_r, np.asarray(img_l), np.asarray(img_r))
+        produced += 1
+
+
+def save_pairs(frames: Iterator[StereoFrame], folder: Path) -> list[dict[str, Any]]:
+    """Write ``left_NNNNNN.png``, ``right_NNNNNN.png`` and ``timestamps.csv`` into ``folder``.
+
+    ``timestamps.csv`` has the columns ``index, left, right, t_left_s, t_right_s,
+    skew_s``. Returns the same rows.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    rows: list[dict[str, Any]] = []
+    for f in frames:
+        names = (f"left_{f.index:06d}.png", f"right_{f.index:06d}.png")
+        for name, img in zip(names, (f.left, f.right), strict=True):
+            ok, buf = cv2.imencode(".png", img)
+            if not ok:
+                raise InputError(f"{name}: could not be encoded as PNG")
+            (folder / name).write_bytes(buf.tobytes())
+        rows.append(
+            {
+                "index": f.index,
+                "left": names[0],
+                "right": names[1],
+                "t_left_s": f.t_left_s,
+                "t_right_s": f.t_right_s,
+                "skew_s": f.skew_s,
+            }
+        )
+    text = io.StringIO()
+    writer = csv.DictWriter(
+        text, fieldnames=["index", "left", "right", "t_left_s", "t_right_s", "skew_s"]
+    )
+    writer.writeheader()
+    writer.writerows(rows)
+    (folder / "timestamps.csv").write_text(text.getvalue(), encoding="utf-8")
+    return rows
+
+
+@contextmanager
+def _opened(spec: str, **kwargs: Any) -> Iterator[cv2.VideoCapture]:
+    cap = open_source(spec, **kwargs)
+    try:
+        yield cap
+    finally:
+        cap.release()
+
+
+def stereo_capture(
+    left: str,
+    right: str,
+    folder: Path,
+    *,
+    n_frames: int,
+    offset_frames: int = 0,
+    every: int = 1,
+    width: int | None = None,
+    height: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Capture ``n_frames`` synchronised pairs from two sources into ``folder``.
+
+    See :func:`open_source`, :func:`read_pairs` and :func:`save_pairs`. ``progress`` is
+    called with ``(done, total)`` after each pair.
+
+    Returns
+    -------
+    list of dict
+        The rows of ``timestamps.csv``.
+
+    Raises
+    ------
+    InputError
+        If a source cannot be opened (named), or yields no frame at all.
+    """
+    devices = (_is_device(left), _is_device(right))
+    with (
+        _opened(left, width=width, height=height) as cap_l,
+        _opened(right, width=width, height=height) as cap_r,
+    ):
+
+        def counted() -> Iterator[StereoFrame]:
+            for f in read_pairs(
+                cap_l,
+                cap_r,
+                n_frames=n_frames,
+                offset_frames=offset_frames,
+                every=every,
+                devices=devices,
+            ):
+                yield f
+                if progress is not None:
+                    progress(f.index + 1, n_frames)
+
+        rows = save_pairs(counted(), folder)
+    if not rows:
+        raise InputError(f"no frame pair could be read from {left} and {right}")
+    if len(rows) < n_frames:
+        log.warning("a source ended after %d of %d pairs", len(rows), n_frames)
+    return rows
