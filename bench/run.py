@@ -15,7 +15,9 @@
    ideal encoder (``counts_per_rev = 0``, ``window_steps = 1``) and ``kd = 0``. Both
    wall times (best of several), their ratio, and how far the two speed traces differ,
    with the evidence that tells where any difference comes from.
-3. Floors, printed PASS/FAIL: the single-motor loop at least 10x faster than
+3. Each capability's own benchmark (``bench/<topic>.py``, its ``run(console)``), in the
+   order of ``TOPICS``: their tables, floors and numbers go into the same results file.
+4. Floors, printed PASS/FAIL: the single-motor loop at least 10x faster than
    python-control's, and at least 1,000 steps/s at N = 10,000. The exit status is 0
    whatever the floors say: this is a measurement, not a test.
 
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as dt
+import importlib
 import json
 import os
 import platform
@@ -56,6 +59,9 @@ from firefleet.sim.engine import SCALAR_MAX_ROBOTS
 FloatArray = NDArray[np.float64]
 
 RESULTS_PATH = Path(__file__).resolve().parent / "results.json"
+
+TOPICS = ("path_following", "stereo")
+"""Modules of bench/ run after the motor benchmarks, each exposing ``run(console)``."""
 
 TEAM_SIZES = (1, 100, 10_000)
 """Team sizes N of the scaling benchmark (2 N wheel motors)."""
@@ -688,12 +694,19 @@ def main() -> int:
     console.print()
     print_floors(console, floors)
 
+    topics: dict[str, Any] = {}
+    for name in TOPICS:
+        console.print()
+        console.print(f"[bold]bench/{name}.py[/]")
+        topics[name] = importlib.import_module(name).run(console)
+
     total = time.perf_counter() - start
     document = {
         "machine": info,
         "team_scaling": rows,
         "single_motor_comparison": peer,
         "floors": floors,
+        "topics": topics,
         "process_max_rss_mb": max_rss_mb(),
         "load_average_1_5_15_at_end": load_average(),
         "bench_wall_time_s": total,
