@@ -148,3 +148,23 @@ def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert f"{total} of {total} claims passed" in index
     assert "FAILED" not in index
     assert str((out / "index.html").resolve()) in capsys.readouterr().out
+
+
+def test_run_path_following_writes_per_robot_metrics(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "coop"
+    assert main(["run", "coop-same-path", "--out", str(out)]) == 0
+    doc = json.loads((out / "metrics.json").read_text())
+    assert len(doc["wait_time_s"]) == 3
+    names = [c["name"] for c in doc["claims"]]
+    assert "wait_time_s[robot 2]" in names
+    robot2 = next(c for c in doc["claims"] if c["name"] == "wait_time_s[robot 2]")
+    assert robot2["measured"] == doc["wait_time_s"][1]
+    with np.load(out / "result.npz") as npz:
+        assert npz["pose"].shape[1:] == (3, 3)
+        assert npz["y_err_m"].shape == npz["t"].shape + (3,)
+        assert npz["odometry_pose"].shape == npz["pose"].shape
+    for png in ("trajectory.png", "velocities.png", "controller.png"):
+        assert (out / png).stat().st_size > 10_000
+    assert "[robot 1]" in capsys.readouterr().out

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
@@ -88,8 +89,10 @@ def _claims_table(document: dict[str, Any]) -> Table:
         if key in ("scenario", "claims"):
             continue
         claims = [c for c in document["claims"] if c["name"].split("[")[0] == key]
-        expected = "; ".join(
-            c["expected"] + c["name"].removeprefix(key).replace("[", " [") for c in claims
+        expected = escape(
+            "; ".join(
+                c["expected"] + c["name"].removeprefix(key).replace("[", " [") for c in claims
+            )
         )
         verdict = " ".join("[green]passed" if c["passed"] else "[red]FAILED" for c in claims)
         table.add_row(key, _shown(value), expected, verdict)
@@ -100,7 +103,7 @@ def _shown(value: Any) -> str:
     if value is None:
         return "n/a"
     if isinstance(value, list):
-        return "[" + ", ".join(_shown(v) for v in value) + "]"
+        return escape("[" + ", ".join(f"{v:.4g}" if v is not None else "n/a" for v in value) + "]")
     return f"{value:.6g}"
 
 
