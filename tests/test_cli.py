@@ -163,7 +163,7 @@ def test_run_path_following_writes_per_robot_metrics(
     assert robot2["measured"] == doc["wait_time_s"][1]
     with np.load(out / "result.npz") as npz:
         assert npz["pose"].shape[1:] == (3, 3)
-        assert npz["y_err_m"].shape == npz["t"].shape + (3,)
+        assert npz["y_err_m"].shape == (*npz["t"].shape, 3)
         assert npz["odometry_pose"].shape == npz["pose"].shape
     for png in ("trajectory.png", "velocities.png", "controller.png"):
         assert (out / png).stat().st_size > 10_000
