@@ -49,7 +49,9 @@ modeling and control", IEEE Trans. SMC 15(1), 1985.
 
 from __future__ import annotations
 
+import csv
 import functools
+import io
 import logging
 import math
 import os
@@ -75,6 +77,8 @@ __all__ = [
     "SugenoOutputMf",
     "SugenoSystem",
     "evaluate",
+    "evaluate_csv",
+    "evaluate_csv_file",
     "fis_text",
     "membership",
     "parse_fis",
@@ -995,14 +999,18 @@ def write_fis(system: SugenoSystem, path: str | Path) -> None:
     InputError
         If the folder does not exist or cannot be written.
     """
-    dest = Path(path)
+    _write_atomic(Path(path), fis_text(system))
+
+
+def _write_atomic(dest: Path, text: str) -> None:
+    """Write ``text`` to a temporary file beside ``dest``, then rename it into place."""
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent)
     except OSError as exc:
         raise InputError(f"{dest}: cannot write: {exc.strerror}") from None
     try:
         with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
-            handle.write(fis_text(system))
+            handle.write(text)
         os.replace(tmp, dest)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -1455,3 +1463,101 @@ def parse_fis(text: str, *, origin: str = "<string>") -> SugenoSystem:
         membership function type or method, counts that disagree with the sections.
     """
     return _Parser(text, origin).parse()
+
+
+def evaluate_csv(system: SugenoSystem, text: str, *, origin: str = "<csv>") -> str:
+    """Evaluate a system on a CSV table of inputs; returns the CSV table of outputs.
+
+    Parameters
+    ----------
+    system : SugenoSystem
+        The controller.
+    text : str
+        CSV with a header row naming every input of ``system`` exactly once (any
+        order), then one row of numbers per sample.
+    origin : str
+        Its name in error messages.
+
+    Returns
+    -------
+    str
+        CSV with a header of the output names and one row per input row, numbers
+        written so they read back to the same floats.
+
+    Raises
+    ------
+    InputError
+        ``"origin:LINE: what"``: no header, a missing or extra column (named), a row
+        with the wrong number of fields, a bad or non-finite number, no data rows.
+    """
+    rows = list(csv.reader(io.StringIO(text)))
+    numbered = [(k, r) for k, r in enumerate(rows, start=1) if any(f.strip() for f in r)]
+    if not numbered:
+        raise InputError(f"{origin}:1: empty file; expected a header naming the inputs")
+    head_line, header = numbered[0]
+    names = [h.strip() for h in header]
+    wanted = [v.name for v in system.inputs]
+    for name in names:
+        if name not in wanted:
+            raise InputError(
+                f"{origin}:{head_line}: column {name!r} is not an input of {system.name!r} "
+                f"(inputs: {wanted})"
+            )
+        if names.count(name) > 1:
+            raise InputError(f"{origin}:{head_line}: column {name!r} given twice")
+    for name in wanted:
+        if name not in names:
+            raise InputError(f"{origin}:{head_line}: missing column {name!r}")
+    order = [names.index(name) for name in wanted]
+    data = numbered[1:]
+    if not data:
+        raise InputError(f"{origin}:{head_line}: no data rows after the header")
+    x = np.empty((len(data), len(wanted)))
+    for row_index, (line, row) in enumerate(data):
+        if len(row) != len(names):
+            raise InputError(f"{origin}:{line}: {len(row)} fields, the header has {len(names)}")
+        for k, col in enumerate(order):
+            field_text = row[col].strip()
+            try:
+                value = float(field_text)
+            except ValueError:
+                raise InputError(
+                    f"{origin}:{line}: column {wanted[k]!r}: bad number {field_text!r}"
+                ) from None
+            if not math.isfinite(value):
+                raise InputError(
+                    f"{origin}:{line}: column {wanted[k]!r}: {field_text} is not finite"
+                )
+            x[row_index, k] = value
+    y = evaluate(system, x).reshape(len(data), len(system.outputs))
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow([o.name for o in system.outputs])
+    writer.writerows([repr(v) for v in row] for row in y.tolist())
+    return out.getvalue()
+
+
+def evaluate_csv_file(system: SugenoSystem, in_path: str | Path, out_path: str | Path) -> int:
+    """:func:`evaluate_csv` from file to file; the output is written atomically.
+
+    Returns
+    -------
+    int
+        The number of rows evaluated.
+
+    Raises
+    ------
+    InputError
+        A missing or unreadable input file, a folder that cannot be written, or any
+        error of :func:`evaluate_csv` (nothing is written then).
+    """
+    src = Path(in_path)
+    try:
+        text = src.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise InputError(f"{src}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{src}: cannot read: {exc}") from None
+    table = evaluate_csv(system, text, origin=str(src))
+    _write_atomic(Path(out_path), table)
+    return table.count("\n") - 1
