@@ -185,10 +185,11 @@ def _gauss(x: FloatArray, p: FloatArray) -> FloatArray:
 def _gbell(x: FloatArray, p: FloatArray) -> FloatArray:
     a, b, c = p[..., 0], p[..., 1], p[..., 2]
     t = ((x - c) / a) ** 2
-    if np.any(b < 0):  # MATLAB: 0 where (x - c) / a == 0 and b < 0 (no 1 / 0)
-        hit = (t == 0.0) & (b < 0)
-        return np.where(hit, 0.0, 1.0 / (1.0 + np.where(hit, 1.0, t) ** b))
-    return 1.0 / (1.0 + t**b)
+    with np.errstate(over="ignore"):  # t**b beyond 1e308 is inf: the degree is 0
+        if np.any(b < 0):  # MATLAB: 0 where (x - c) / a == 0 and b < 0 (no 1 / 0)
+            hit = (t == 0.0) & (b < 0)
+            return np.where(hit, 0.0, 1.0 / (1.0 + np.where(hit, 1.0, t) ** b))
+        return 1.0 / (1.0 + t**b)
 
 
 def _sig(x: FloatArray, p: FloatArray) -> FloatArray:
@@ -617,7 +618,10 @@ def _scalar_mf(kind: str, p: tuple[float, ...]) -> _Scalar:
             t = ((x - c) / a) ** 2
             if t == 0.0 and b < 0:
                 return 0.0
-            return 1.0 / (1.0 + float(t**b))
+            try:
+                return 1.0 / (1.0 + float(t**b))
+            except OverflowError:  # |(x - c)/a|^(2b) beyond 1e308: the degree is 0
+                return 0.0
 
         return gbell
     if kind == "sigmf":
@@ -1349,7 +1353,7 @@ class _Parser:
         secs = [s for s in self.sections if s.kind == "Rules"]
         count_line, n_rules = count
         if not secs:
-            self.fail(self.n_lines or 1, "missing [Rules] section")
+            self.fail(count_line, f"NumRules={n_rules} but there is no [Rules] section")
         if len(secs) > 1:
             self.fail(secs[1].line, "[Rules] given twice")
         sec = secs[0]
