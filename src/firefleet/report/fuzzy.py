@@ -164,7 +164,7 @@ def membership_png(system: SugenoSystem, input: str | int) -> bytes:
             (x[peak], y[peak]),
             xytext=(0, 4 + 9 * (k % 2)),
             textcoords="offset points",
-            ha="center",
+            ha="left" if peak < 0.1 * x.size else "right" if peak > 0.9 * x.size else "center",
             fontsize=8,
             color=line.get_color(),
         )
