@@ -5,6 +5,11 @@ batch. The simulator's compiled team loop cannot call NumPy functions on objects
 :func:`compile_system` flattens a system into arrays and :func:`eval_one` evaluates one
 sample with scalar arithmetic, the same definitions (MATLAB Fuzzy Logic Toolbox) in the
 same order. Tests check that the two agree to rounding.
+
+:func:`eval_one` is inlined into its callers: passing its fourteen arrays through a call
+costs more (reference counting) than evaluating the system. Numba's on-disk cache keys a
+compiled function on its own file only: after editing this module, remove the caches
+(``make clean``) so the simulator's kernel is compiled again.
 """
 
 from __future__ import annotations
@@ -132,9 +137,10 @@ def compile_system(system: Any) -> FisTables:
 
 
 @numba.njit(cache=True)
-def membership_one(kind: int, p: FloatArray, x: float) -> float:  # pragma: no cover - jit
-    """One membership degree, MATLAB's definitions (see ``firefleet.control.fuzzy``)."""
-    a, b, c, d = float(p[0]), float(p[1]), float(p[2]), float(p[3])
+def membership_one(kind: int, p: FloatArray, m: int, x: float) -> float:  # pragma: no cover
+    """Degree of ``x`` in membership function ``m`` (row ``m`` of ``p``, (M, 4)), MATLAB's
+    definitions (see ``firefleet.control.fuzzy``)."""
+    a, b, c, d = float(p[m, 0]), float(p[m, 1]), float(p[m, 2]), float(p[m, 3])
     if kind == 0:  # trimf [a b c]
         if x == b:
             return 1.0
@@ -176,7 +182,7 @@ def membership_one(kind: int, p: FloatArray, x: float) -> float:  # pragma: no c
     return 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def eval_one(
     x: FloatArray,
     mf_kind: IntArray,
@@ -202,17 +208,17 @@ def eval_one(
     n_in = x.shape[0]
     n_mf = mf_kind.shape[0]
     n_out = out.shape[0]
-    xc = work[:n_in]
-    mu = work[n_in : n_in + n_mf]
-    num = work[n_in + n_mf : n_in + n_mf + n_out]
-    den = work[n_in + n_mf + n_out : n_in + n_mf + 2 * n_out]
+    # work holds, one after the other: clipped inputs, memberships, numerators, weights
+    mu0 = n_in
+    num0 = n_in + n_mf
+    den0 = num0 + n_out
     for i in range(n_in):
-        xc[i] = min(max(x[i], in_range[i, 0]), in_range[i, 1])
+        work[i] = min(max(x[i], in_range[i, 0]), in_range[i, 1])
     for m in range(n_mf):
-        mu[m] = membership_one(mf_kind[m], mf_params[m], xc[mf_input[m]])
+        work[mu0 + m] = membership_one(mf_kind[m], mf_params, m, work[mf_input[m]])
     for o in range(n_out):
-        num[o] = 0.0
-        den[o] = 0.0
+        work[num0 + o] = 0.0
+        work[den0 + o] = 0.0
     for r in range(rule_mf.shape[0]):
         is_or = rule_or[r]
         w = 0.0 if is_or else 1.0
@@ -223,7 +229,7 @@ def eval_one(
             m = rule_mf[r, i]
             if m < 0:
                 continue
-            d = 1.0 - mu[m] if rule_not[r, i] else mu[m]
+            d = 1.0 - work[mu0 + m] if rule_not[r, i] else work[mu0 + m]
             if not started:
                 w = d
                 started = True
@@ -240,13 +246,13 @@ def eval_one(
                 continue
             z = out_coef[k, n_in]
             for i in range(n_in):
-                z += out_coef[k, i] * xc[i]
-            num[o] += w * z
-            den[o] += w
+                z += out_coef[k, i] * work[i]
+            work[num0 + o] += w * z
+            work[den0 + o] += w
     for o in range(n_out):
         if flags[2] == 1:
-            out[o] = num[o]
-        elif den[o] > 0.0:
-            out[o] = num[o] / den[o]
+            out[o] = work[num0 + o]
+        elif work[den0 + o] > 0.0:
+            out[o] = work[num0 + o] / work[den0 + o]
         else:
             out[o] = out_mid[o]

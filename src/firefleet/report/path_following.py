@@ -118,8 +118,10 @@ def _memberships(ax: matplotlib.axes.Axes, system: object, index: int, title: st
     tables = compile_system(system)
     first = int(np.nonzero(tables.mf_input == index)[0][0])
     for m, mf in enumerate(var.mfs):
-        code, params = tables.mf_kind[first + m], tables.mf_params[first + m]
-        ax.plot(xs, [membership_one(code, params, x) for x in xs], label=mf.name)
+        code = tables.mf_kind[first + m]
+        ax.plot(
+            xs, [membership_one(code, tables.mf_params, first + m, x) for x in xs], label=mf.name
+        )
     ax.set_title(title, fontsize=9)
     ax.set_ylim(-0.02, 1.05)
     ax.legend(fontsize=6, loc="center right")
