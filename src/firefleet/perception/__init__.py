@@ -1,0 +1,4 @@
+"""Perception: thermal imaging (:mod:`firefleet.perception.thermal`, the Lepton's VoSPI
+stream in :mod:`firefleet.perception.vospi`) and stereo vision. Libraries first: arrays
+in, arrays or small typed results out; the simulator feeds them through the same calls.
+"""
