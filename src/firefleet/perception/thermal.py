@@ -145,8 +145,8 @@ class CameraModel:
 
     @property
     def pixel_angle_rad(self) -> float:
-        """Angle of one pixel at the image centre, ``atan(1 / fx)`` [rad] (Lepton: 0.64 deg)."""
-        return math.atan(1.0 / self.fx_px)
+        """Mean angle of one pixel across the image, ``hfov / width`` [rad] (Lepton: 0.6375 deg)."""
+        return self.hfov_rad / self.width_px
 
     @property
     def distorted(self) -> bool:
