@@ -71,7 +71,9 @@ def test_segment_number_in_packet_20_of_lepton3() -> None:
 @pytest.mark.parametrize("lepton", [2, 3])
 def test_round_trip_with_discards_and_invalid_frames(lepton: int) -> None:
     frames = _frames(lepton, 4, 4)
-    stream = encode_vospi(frames, lepton=3 if lepton == 3 else 2, invalid_frames=2, discards_between=3)
+    stream = encode_vospi(
+        frames, lepton=3 if lepton == 3 else 2, invalid_frames=2, discards_between=3
+    )
     out = parse_vospi(stream, lepton=3 if lepton == 3 else 2)
     assert np.array_equal(out.frames, frames)
     s = out.stats

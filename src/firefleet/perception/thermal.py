@@ -10,9 +10,13 @@ Pipeline of :func:`detect` on one frame in degrees Celsius ``(H, W)``:
 
 1. :func:`denoise`: column fixed-pattern offsets removed (:func:`destripe`), then a
    3 x 3 median (dead pixels, temporal noise).
-2. Background: the frame's median. Candidate regions are the 8-connected components
-   of pixels at least ``warm_contrast_k / 2`` above it that hold a pixel at least
-   ``warm_contrast_k`` above it (hysteresis).
+   Pixels at fire temperatures are kept unfiltered (a median would erase a fire that
+   fills one or two pixels).
+2. Local background: a grey opening along each row with a segment a third of the
+   frame wide (an object narrower than that is removed from it; a band of warm wall
+   across the view and a step edge between a hot wall and a cool floor are kept). Candidate regions are the 8-connected components of
+   pixels at least ``warm_contrast_k / 2`` above it that hold a pixel at least
+   ``warm_contrast_k`` above it (hysteresis), and of pixels at fire temperatures.
 3. Each region: area, peak and mean temperature, centroid, bounding box, and the
    temperature of its surround (median of a ring around it).
 4. Kind: ``"fire"`` if its peak reaches ``fire_min_c``, or ``fire_contrast_min_c``
@@ -421,45 +425,41 @@ def _read_image_counts(p: Path) -> NDArray[np.uint16]:
 # -------------------------------------------------------------------------- filtering
 
 
-def destripe(
-    frame_c: ArrayLike, *, max_step_k: float = 1.0, window_px: int = 7, iterations: int = 3
-) -> tuple[FloatArray, FloatArray]:
+def destripe(frame_c: ArrayLike, *, max_step_k: float = 1.0) -> tuple[FloatArray, FloatArray]:
     """Remove column fixed-pattern offsets (the stripes of an uncooled microbolometer).
 
-    Each column's offset is the median over rows of the frame minus its horizontal
-    running median (``window_px`` wide), over the pixels where that difference is
-    below ``max_step_k`` (object edges excluded); repeated ``iterations`` times.
+    The step between neighbouring columns' offsets is the median over rows of the
+    difference of the two columns, over the rows where that difference is below
+    ``max_step_k`` (object edges excluded); the offsets are the running sum of the
+    steps, less their mean and linear trend (a linear ramp of offsets cannot be told
+    from a scene's temperature gradient, so it is left in the scene).
 
     Parameters
     ----------
     frame_c : array_like, shape (H, W)
         Temperatures [C].
-    max_step_k, window_px, iterations : keyword-only
-        Largest offset believed to be a stripe [K]; running-median width [px];
-        refinement passes.
+    max_step_k : float, keyword-only
+        Largest column-to-column difference believed to be a stripe, not a scene edge [K].
 
     Returns
     -------
     frame : ndarray, shape (H, W)
         Corrected frame [C].
     offsets : ndarray, shape (W,)
-        Column offsets removed [K], zero mean.
+        Column offsets removed [K] (zero mean, zero linear trend).
     """
     f = check_frame(frame_c)
-    total = np.zeros(f.shape[1])
-    for _ in range(iterations):
-        smooth = ndi.median_filter(f, size=(1, window_px), mode="nearest")
-        resid = f - smooth
-        masked = np.where(np.abs(resid) < max_step_k, resid, np.nan)
-        counts = np.sum(np.isfinite(masked), axis=0)
-        offs = np.zeros(f.shape[1])
-        has = counts > 0
-        if has.any():
-            offs[has] = np.nanmedian(masked[:, has], axis=0)
-        offs -= offs.mean()
-        f = f - offs
-        total += offs
-    return f, total
+    diff = f[:, 1:] - f[:, :-1]
+    masked = np.where(np.abs(diff) < max_step_k, diff, np.nan)
+    steps = np.zeros(diff.shape[1])
+    usable = np.isfinite(masked).any(axis=0)
+    if usable.any():
+        steps[usable] = np.nanmedian(masked[:, usable], axis=0)
+    offsets = np.concatenate([[0.0], np.cumsum(steps)])
+    x = np.arange(offsets.size, dtype=np.float64)
+    slope, intercept = np.polyfit(x, offsets, 1)
+    offsets = offsets - (slope * x + intercept)
+    return f - offsets, offsets
 
 
 def denoise(
@@ -514,8 +514,12 @@ class DetectionParams:
     Attributes
     ----------
     warm_contrast_k : float
-        A region's peak must be this far above the frame's median [K]; its pixels
+        A region's peak must be this far above the local background [K]; its pixels
         half as far (hysteresis).
+    background_px : int or None
+        Length of the row segment of the local background's grey opening [px]; objects
+        narrower than it are found. ``None``: a third of the frame's width
+        (at least 15).
     min_area_px : int
         Smallest region reported [px].
     fire_min_c : float
@@ -545,12 +549,14 @@ class DetectionParams:
     depth_sigma_rel : float
         Smallest relative 1-sigma error of a stereo depth.
     median_size : int
-        Median filter width [px] of :func:`denoise`.
+        Median filter width [px] of :func:`denoise` (pixels at ``fire_contrast_min_c``
+        or above are exempt).
     destripe : bool
         Remove column stripes first.
     """
 
     warm_contrast_k: float = 3.0
+    background_px: int | None = None
     min_area_px: int = 2
     fire_min_c: float = 100.0
     fire_contrast_min_c: float = 60.0
@@ -594,6 +600,8 @@ class DetectionParams:
         )
         if self.fire_width_m is not None:
             check_fields(self, "detection", positive=("fire_width_m",))
+        if self.background_px is not None:
+            check_fields(self, "detection", positive=("background_px",))
         if self.fire_width_sigma_m is not None:
             check_fields(self, "detection", non_negative=("fire_width_sigma_m",))
         if not self.person_min_c < self.person_max_c:
@@ -866,18 +874,28 @@ def detect(
         depth = np.asarray(depth_m, dtype=np.float64)
         if depth.shape != raw.shape:
             raise InputError(f"depth_m shape {depth.shape} differs from the frame's {raw.shape}")
-    f = denoise(raw, median_size=p.median_size, stripes=p.destripe)
+    flat = destripe(raw)[0] if p.destripe else raw
+    f = denoise(flat, median_size=p.median_size, stripes=False)
+    # a fire far away may fill one or two pixels, which a median filter would erase: keep
+    # every pixel hot enough to be a fire as it was (after destriping only)
+    hot = flat >= p.fire_contrast_min_c
+    if hot.any():
+        f = np.where(hot, flat, f)
     background = float(np.median(f))
-    low = f >= background + 0.5 * p.warm_contrast_k
+    size = p.background_px if p.background_px is not None else max(15, raw.shape[1] // 3)
+    # local background: a grey opening (erosion then dilation) along each row removes
+    # every warm structure narrower than ``size`` and keeps wider ones (a band of warm
+    # wall across the view) and horizontal step edges (hot wall above a cool floor)
+    contrast = f - ndi.grey_opening(f, size=(1, size), mode="nearest")
+    fiery = f >= p.fire_contrast_min_c
+    low = (contrast >= 0.5 * p.warm_contrast_k) | fiery
     labels, n = ndi.label(low, structure=np.ones((3, 3), dtype=bool))
     if n == 0:
         return FrameDetections(detections=(), background_c=background, filtered_c=f)
     index = np.arange(1, n + 1)
-    peaks = ndi.maximum(f, labels, index)
-    areas = ndi.sum_labels(np.ones_like(f), labels, index)
-    keep = (np.asarray(peaks) >= background + p.warm_contrast_k) & (
-        np.asarray(areas) >= p.min_area_px
-    )
+    top = np.asarray(ndi.maximum(np.where(fiery, np.inf, contrast), labels, index))
+    areas = np.asarray(ndi.sum_labels(np.ones_like(f), labels, index))
+    keep = (top >= p.warm_contrast_k) & (areas >= p.min_area_px)
     slices = ndi.find_objects(labels)
     found: list[Detection] = []
     for lab in index[keep]:
@@ -950,7 +968,9 @@ def _describe(
         )
         rng = stereo if stereo is not None else prior
         kind = "warm"
-        if p.person_min_c <= mean <= p.person_max_c and rng is not None:
+        # a region cut by the left or right border has no width to judge (often the end of
+        # a warm wall): it stays "warm"
+        if p.person_min_c <= mean <= p.person_max_c and rng is not None and not cut_h:
             r = rng[0]
             width_at_r = 2.0 * r * math.tan(0.5 * ang_w) if math.isfinite(ang_w) else 0.0
             height_at_r = r * dtan_v if math.isfinite(dtan_v) else math.nan
