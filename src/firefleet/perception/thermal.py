@@ -63,6 +63,8 @@ __all__ = [
     "denoise",
     "destripe",
     "detect",
+    "detections_document",
+    "frame_paths",
     "radiance_to_celsius",
     "range_from_size",
     "read_frame",
@@ -998,3 +1000,36 @@ def _describe(
         range_sigma_m=None if rng is None else rng[1],
         range_source=None if rng is None else ("stereo" if rng is stereo else "size"),
     )
+
+
+def frame_paths(inputs: list[str] | tuple[str, ...]) -> list[Path]:
+    """The frame files named by ``inputs`` (files, or folders searched for frame files).
+
+    Raises
+    ------
+    InputError
+        A path that does not exist, or a folder without frames.
+    """
+    paths: list[Path] = []
+    for item in inputs:
+        p = Path(item)
+        if p.is_dir():
+            found = sorted(q for q in p.iterdir() if q.suffix.lower() in FRAME_SUFFIXES)
+            if not found:
+                raise InputError(f"{p}: folder holds no frames ({', '.join(FRAME_SUFFIXES)})")
+            paths.extend(found)
+        elif p.exists():
+            paths.append(p)
+        else:
+            raise InputError(f"{p}: no such file or folder")
+    return paths
+
+
+def detections_document(name: str, result: FrameDetections) -> dict[str, Any]:
+    """The ``detections.json`` entry of one frame."""
+    return {
+        "frame": name,
+        "fire_alarm": result.fire_alarm,
+        "background_c": round(result.background_c, 3),
+        "detections": [d.to_json() for d in result.detections],
+    }
