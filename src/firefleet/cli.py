@@ -218,7 +218,9 @@ def _add_thermal_parser(sub: Any) -> None:
     thermal = sub.add_parser(
         "thermal", help="find fires and people in thermal frames; PNGs and detections.json"
     )
-    thermal.add_argument("frames", nargs="+", metavar="FRAME", help=".npy (C) or image; or a folder")
+    thermal.add_argument(
+        "frames", nargs="+", metavar="FRAME", help=".npy (C) or image; or a folder"
+    )
     thermal.add_argument("--out", metavar="DIR", default="runs/thermal", help="output folder")
     thermal.add_argument(
         "--counts",

@@ -260,13 +260,15 @@ def _box_scene(value: float, rows: slice, cols: slice) -> NDArray[np.float64]:
 def test_classification_fire_person_warm() -> None:
     p = DetectionParams(destripe=False)
     fire = detect(_box_scene(250.0, slice(30, 34), slice(10, 13)), params=p)
-    assert fire.fire_alarm and fire.detections[0].kind == "fire"
+    assert fire.fire_alarm
+    assert fire.detections[0].kind == "fire"
     # a small hot spot at 70 C, 50 K above its surround: fire by contrast
     spot = detect(_box_scene(70.0, slice(30, 32), slice(10, 12)), params=p)
     assert spot.detections[0].kind == "fire"
     # 45 C radiator panel: warm, not a fire (below 60 C)
     rad = detect(_box_scene(45.0, slice(30, 40), slice(10, 30)), params=p)
-    assert not rad.fire_alarm and rad.detections[0].kind == "warm"
+    assert not rad.fire_alarm
+    assert rad.detections[0].kind == "warm"
     # 33 C, 28 x 8 px upright: a person at ~5 m
     person = detect(_box_scene(33.0, slice(10, 38), slice(36, 44)), params=p)
     assert person.detections[0].kind == "person"
@@ -282,6 +284,7 @@ def test_stereo_depth_gives_the_range() -> None:
     x, _ = cam.normalized(det.centroid_rc[0], det.centroid_rc[1])
     assert det.range_source == "stereo"
     assert det.range_m == pytest.approx(3.0 * math.sqrt(1 + float(x) ** 2), rel=1e-12)
+    assert det.range_m is not None
     assert det.range_sigma_m == pytest.approx(0.02 * det.range_m)  # the 2 % floor, no spread
 
 

@@ -31,14 +31,16 @@ def test_real_frames_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     doc = json.loads((out / "detections.json").read_text())
     by_name = {d["frame"]: d for d in doc}
     t420 = by_name["flir_t420_frame0_celsius.npy"]
-    assert not t420["fire_alarm"] and not by_name["flir_duo_pro_r_frame0_celsius.npy"]["fire_alarm"]
+    assert not t420["fire_alarm"]
+    assert not by_name["flir_duo_pro_r_frame0_celsius.npy"]["fire_alarm"]
     assert len(t420["detections"]) == 1
     det = t420["detections"][0]
     assert det["kind"] == "warm"
     assert set(det) >= {"centroid_rc", "bbox_rc", "peak_c", "mean_c", "area_px", "bearing_rad"}
     assert det["range_m"] is None
     # README: near row 128, column 172 (3 px: the object's radius)
-    assert abs(det["centroid_rc"][0] - 128) < 3 and abs(det["centroid_rc"][1] - 172) < 3
+    assert abs(det["centroid_rc"][0] - 128) < 3
+    assert abs(det["centroid_rc"][1] - 172) < 3
     for stem in ("flir_t420_frame0_celsius", "flir_duo_pro_r_frame0_celsius"):
         assert (out / f"{stem}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "flir_t420_frame0_celsius.npy" in capsys.readouterr().out
@@ -49,7 +51,9 @@ def test_counts_png_with_tlinear(tmp_path: Path) -> None:
     counts[20:24, 30:33] = 52315  # 250.00 C: a fire
     cv2.imwrite(str(tmp_path / "fire.png"), counts)
     out = tmp_path / "o"
-    assert main(["thermal", str(tmp_path / "fire.png"), "--counts", "tlinear", "--out", str(out)]) == 0
+    assert (
+        main(["thermal", str(tmp_path / "fire.png"), "--counts", "tlinear", "--out", str(out)]) == 0
+    )
     doc = json.loads((out / "detections.json").read_text())
     assert doc[0]["fire_alarm"] is True
     assert doc[0]["detections"][0]["peak_c"] == pytest.approx(250.0, abs=1e-6)
@@ -90,6 +94,7 @@ def test_bad_input_exits_2_one_line_nothing_written(
     assert main(["thermal", str(tmp_path / "good.npy"), str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert message in err
-    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err
     assert not out.exists()  # the good frame's outputs were staged, then dropped
     assert not list(tmp_path.glob(".out.staging-*"))

@@ -265,5 +265,5 @@ def test_damaged_lepton2_streams_never_raise_nor_mix_frames(
 @given(junk=st.binary(max_size=3000))
 def test_arbitrary_bytes_never_raise(junk: bytes) -> None:
     for lepton in (2, 3):
-        out = parse_vospi(junk, lepton=lepton)  # type: ignore[arg-type]
+        out = parse_vospi(junk, lepton=lepton)
         assert out.stats.frames == out.frames.shape[0]

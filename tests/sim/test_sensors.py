@@ -130,7 +130,9 @@ def test_fires_and_people_at_known_bearings_and_ranges() -> None:
         found = detect(frame, camera=cam, params=params)
         assert found.fire_alarm, f"trial {trial}: fire missed"
 
-        def nearest(kind: str, b: float, found: FrameDetections = found) -> Detection:
+        def nearest(
+            kind: str, b: float, found: FrameDetections = found, trial: int = trial
+        ) -> Detection:
             hits = [d for d in found.detections if d.kind == kind]
             assert hits, f"trial {trial}: no {kind} in {found.detections}"
             return min(hits, key=lambda d: abs(_wrap(d.bearing_rad - b)))
@@ -138,7 +140,8 @@ def test_fires_and_people_at_known_bearings_and_ranges() -> None:
         fire, person = nearest("fire", fire_b), nearest("person", person_b)
         for det, b in ((fire, fire_b), (person, person_b)):
             worst["bearing"] = max(worst["bearing"], abs(_wrap(det.bearing_rad - b)))
-        assert fire.range_m is not None and person.range_m is not None
+        assert fire.range_m is not None
+        assert person.range_m is not None
         worst["fire_range"] = max(worst["fire_range"], abs(fire.range_m / fire_r - 1))
         worst["person_range"] = max(worst["person_range"], abs(person.range_m / person_r - 1))
     # the bounds: one pixel's angle (51/80 deg) and 15 % of the range

@@ -14,9 +14,10 @@ Pipeline of :func:`detect` on one frame in degrees Celsius ``(H, W)``:
    fills one or two pixels).
 2. Local background: a grey opening along each row with a segment a third of the
    frame wide (an object narrower than that is removed from it; a band of warm wall
-   across the view and a step edge between a hot wall and a cool floor are kept). Candidate regions are the 8-connected components of
-   pixels at least ``warm_contrast_k / 2`` above it that hold a pixel at least
-   ``warm_contrast_k`` above it (hysteresis), and of pixels at fire temperatures.
+   across the view and a step edge between a hot wall and a cool floor are kept).
+   Candidate regions are the 8-connected components of pixels at least
+   ``warm_contrast_k / 2`` above it that hold a pixel at least ``warm_contrast_k``
+   above it (hysteresis), and of pixels at fire temperatures.
 3. Each region: area, peak and mean temperature, centroid, bounding box, and the
    temperature of its surround (median of a ring around it).
 4. Kind: ``"fire"`` if its peak reaches ``fire_min_c``, or ``fire_contrast_min_c``
