@@ -186,11 +186,12 @@ def _damage(stream: bytes, ops: list[tuple[str, int, object]], cycle_segments: i
     """Apply the damage ops in turn.
 
     Two kinds of damage are beyond any parser (no frame identifier in a segment or a
-    packet; see the module docstring), so they are not generated: losing a whole frame
-    cycle of segments (``cycle_segments``; 0 = no such limit, a Lepton 2 frame is one
-    unit), which needs at least that many bytes removed; and transplanting a packet
-    onto the same packet number of another frame (swaps are kept within 59 packets,
-    a local reordering).
+    packet; see the module docstring), so they are not generated: losing exactly a
+    whole frame cycle of video packets (``cycle_segments`` segments of 60 packets; a
+    Lepton 2 frame is 1), which needs at least that many bytes removed - hypothesis
+    found the Lepton 2 case (A0 + B1..B59 after losing A1..A59 and B0); and
+    transplanting a packet onto the same packet number of another frame (swaps are kept
+    within 59 packets, a local reordering).
     """
     buf = bytearray(stream)
     removed = 0
@@ -254,7 +255,7 @@ def test_damaged_lepton2_streams_never_raise_nor_mix_frames(
 ) -> None:
     frames = _frames(2, 6, 12)
     stream = encode_vospi(frames, lepton=2, discards_between=2)
-    damaged = _damage(stream, ops, 0)
+    damaged = _damage(stream, ops, 1)
     out = parse_vospi(damaged, lepton=2)
     assert out.stats.frames == out.frames.shape[0]
     for frame in out.frames:

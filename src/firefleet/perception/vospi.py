@@ -29,10 +29,13 @@ in order per segment, segments 1-2-3-4 in order with nothing between them but di
 packets. Any damage between two segments abandons the partial frame, so segments of
 different frames are never put together.
 
-Limits of the protocol, not of the parser: a segment carries no frame identifier, so
-the loss of a whole number of complete frame cycles of segments exactly at segment
-boundaries leaves no trace in the stream; and an accidental CRC match among corrupted
-bytes has probability 2^-16 per packet tried (reduced further by the sequence checks).
+Limits of the protocol, not of the parser: packets and segments carry no frame
+identifier, so the loss of exactly a whole number of frame cycles of video packets (60
+packets on a Lepton 2; 4 segments, or 12 with the camera's invalid frames, on a
+Lepton 3) leaves a consistent sequence, and the frame around the gap is assembled from
+two frames (telemetry's frame counter, not parsed here, would be needed to see it); and
+an accidental CRC match among corrupted bytes has probability 2^-16 per packet tried
+(reduced further by the sequence checks).
 An all-zero packet passes the CRC trivially (CRC of zeros is zero); it is treated as
 damage, since no Lepton output (Raw14 or TLinear) is zero across a whole line.
 """
