@@ -110,7 +110,14 @@ def test_open_loop_steady_speed_is_the_analytic_value() -> None:
     )
 
 
-@pytest.mark.parametrize("name", builtin_names())
+MOTOR_SCENARIOS = [
+    n
+    for n in builtin_names()
+    if load_scenario(n).command.kind in ("voltage-step", "wheel-speed-step")
+]
+
+
+@pytest.mark.parametrize("name", MOTOR_SCENARIOS)  # the backends are the motor runner's
 @pytest.mark.parametrize("n_robots", [1, 3])
 @pytest.mark.parametrize("counts_per_rev", [0, 2048])
 def test_scalar_and_array_backends_agree(name: str, n_robots: int, counts_per_rev: int) -> None:

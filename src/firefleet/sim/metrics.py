@@ -9,7 +9,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError, as_float_array
-from firefleet.scenarios.schema import Claim, VoltageStep, WheelSpeedStep
+from firefleet.scenarios.schema import Claim, Formation, VoltageStep, WheelSpeedStep
+from firefleet.sim.formation import formation_metrics
 from firefleet.sim.result import SimResult
 
 __all__ = [
@@ -137,6 +138,8 @@ def compute_metrics(result: SimResult) -> Metrics:
     cmd = result.scenario.command
     if isinstance(cmd, VoltageStep | WheelSpeedStep):
         return dict(_motor_metrics(result))
+    if isinstance(cmd, Formation):
+        return formation_metrics(result)
     raise InputError(f"no metrics for a {cmd.kind} scenario")
 
 
