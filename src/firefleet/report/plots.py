@@ -163,6 +163,10 @@ def _transients(result: SimResult, metrics: Metrics) -> bytes:
 def figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
     """The figures of a run, as PNG bytes by file name."""
     cmd = result.scenario.command
+    if cmd.kind == "formation":
+        from firefleet.report.formation import formation_figures
+
+        return formation_figures(result, metrics)
     if not isinstance(cmd, VoltageStep | WheelSpeedStep):
         raise ValueError(f"no figures for a {cmd.kind} scenario")
     out = {"response.png": _motor_response(result)}
