@@ -23,7 +23,7 @@ __all__ = ["formation_animation", "formation_figures"]
 
 FloatArray = NDArray[np.float64]
 
-_GIF_FRAMES = 60
+_GIF_FRAMES = 40
 """Frames of the animation (spread evenly over the run)."""
 _GIF_FPS = 12
 
@@ -210,6 +210,7 @@ def formation_animation(result: SimResult, *, frames: int = _GIF_FRAMES) -> byte
     pose = result.pose
     n = pose.shape[1]
     idx = np.unique(np.linspace(0, result.t.size - 1, max(2, frames)).round().astype(int))
+    stride = max(1, result.t.size // 400)  # trails of at most ~400 points
     lo = np.minimum(pose[:, :, :2].min(axis=(0, 1)), leader.min(axis=0) - cmd.alpha_m) - 0.5
     hi = np.maximum(pose[:, :, :2].max(axis=(0, 1)), leader.max(axis=0) + cmd.alpha_m) + 0.5
     height = float(np.clip(6.0 * (hi[1] - lo[1]) / (hi[0] - lo[0]), 2.5, 6.0))
@@ -232,7 +233,7 @@ def formation_animation(result: SimResult, *, frames: int = _GIF_FRAMES) -> byte
         for k in range(n):
             bodies[k].center = (float(pose[j, k, 0]), float(pose[j, k, 1]))
             bodies[k].set_alpha(1.0 if active[j, k] else 0.35)
-            trails[k].set_data(pose[: j + 1, k, 0], pose[: j + 1, k, 1])
+            trails[k].set_data(pose[: j + 1 : stride, k, 0], pose[: j + 1 : stride, k, 1])
         ring.center = (float(leader[j, 0]), float(leader[j, 1]))
         centre.set_data([leader[j, 0]], [leader[j, 1]])
         title.set_text(f"{result.scenario.name}   t = {result.t[j]:5.1f} s")
@@ -253,7 +254,7 @@ def formation_figures(
     """The figures of a formation run, by file name (``metrics`` is not drawn).
 
     ``trajectories.png`` and ``shape.png`` for every run; ``formation.gif`` (an
-    animation) when something moves after the start: the leader, or a robot fails.
+    animation, about 2 s to make) when the leader moves.
     """
     cmd = _command(result)
     out = {
@@ -261,6 +262,6 @@ def formation_figures(
         "shape.png": _shape(result, cmd),
     }
     moving = cmd.leader.speed_m_s > 0 and len(cmd.leader.waypoints_m) > 1
-    if moving or (cmd.failure is not None and cmd.failure.time_s < result.t[-1]):
+    if moving:
         out["formation.gif"] = formation_animation(result)
     return out

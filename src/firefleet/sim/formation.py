@@ -88,8 +88,11 @@ def leader_trajectory(
     Returns
     -------
     xy_m, v_m_s, a_m_s2 : ndarray, shape (T, 2)
-        Position [m], velocity [m/s] and acceleration [m/s^2] (the turn at a corner is
-        instantaneous: no acceleration is reported for it).
+        Position [m], velocity [m/s] and acceleration [m/s^2]. The turn at a corner
+        is instantaneous: the velocity changes direction in one step, with no
+        acceleration reported, so point-mass robots swing out at a corner (their
+        feedforward cannot give a velocity step); diff-drive robots, whose formation
+        point follows a velocity command, take it in their stride.
     """
     t = np.asarray(t_s, dtype=np.float64)
     pts = np.array(path.waypoints_m, dtype=np.float64).reshape(-1, 2)
