@@ -96,6 +96,24 @@ def test_batched_force_equals_a_double_loop(block_elems: int) -> None:
     np.testing.assert_allclose(f, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
 
 
+def test_contact_force_equals_a_double_loop() -> None:
+    rng = np.random.default_rng(8)
+    pos = rng.uniform(0, 3, (60, 2))  # dense: many bodies within reach of each other
+    ref = np.zeros((60, 2))
+    for k in range(60):
+        for i in range(60):
+            d = pos[k] - pos[i]
+            r = math.hypot(d[0], d[1])
+            gap = r - 0.3
+            if i != k and gap < 0.5:
+                g = max(gap, 1e-3)
+                ref[k] += 0.05 * (1 / g - 1 / 0.5) / g**2 * d / r  # FIRAS, Khatib 1986
+    f = contact_repulsion(pos, radius_m=0.15, range_m=0.5, gain=0.05)
+    assert np.abs(ref).max() > 1.0  # some bodies are close
+    # same terms, summed in another order: relative 1e-12
+    np.testing.assert_allclose(f, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+
+
 def test_coincident_robots_exert_no_force() -> None:
     pos = np.array([[1.0, 1.0], [1.0, 1.0], [3.0, 1.0]])
     f = coulomb_repulsion(pos, k_r=10.0)

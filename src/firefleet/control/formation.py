@@ -34,8 +34,9 @@ gaps exceed ``contact_range_m``, so it leaves the polygon untouched.
 Obstacles (circles) repel with the same FIRAS force on the gap between a robot's body
 and the obstacle (Rezaee and Abdollahi 2014 treat obstacles as repulsive too).
 
-The pairwise sums are evaluated in row blocks of at most ``block_elems`` pairs, so the
-memory is O(N + block), not O(N^2): no N x N x k temporaries at any team size.
+The Coulomb sums are evaluated in row blocks of at most ``block_elems`` pairs, so the
+memory is O(N + block), not O(N^2): no N x N x k temporaries at any team size. The
+short-range contact pairs come from a k-d tree (O(N log N)).
 
 References
 ----------
@@ -53,6 +54,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 
 from firefleet.errors import InputError, as_float_array, check_fields
 
@@ -181,27 +183,19 @@ def _charges(charge: ArrayLike, n: int) -> FloatArray:
     return as_float_array(q, "charge", (n,))
 
 
-def _pair_forces(
-    p: FloatArray,
-    q: FloatArray,
-    k_r: float,
-    contact: tuple[float, float, float] | None,
-    block_elems: int,
-) -> tuple[FloatArray, FloatArray]:
-    """Coulomb sum (without the k_r q_k factor) and FIRAS contact force, in one pass.
+def _coulomb_sums(p: FloatArray, q: FloatArray, block_elems: int) -> FloatArray:
+    """``sum_i q_i (p_k - p_i) / r_ki^3`` for every k (eq. 8 without ``k_r q_k``).
 
-    ``contact`` is (body radius, range, gain) or None. Rows are taken in blocks of
-    ``block_elems // N`` robots; every temporary is (rows, N), never (N, N, 2).
+    Rows are taken in blocks of ``block_elems // N`` robots; every temporary is
+    (rows, N), never (N, N, 2).
     """
     n = p.shape[0]
-    coulomb = np.zeros((n, 2))
-    touch = np.zeros((n, 2))
+    out = np.zeros((n, 2))
     if n < 2:
-        return coulomb, touch
+        return out
     p = p - p.mean(axis=0)  # translation-invariant; keeps the numbers near 0
     x, y = p[:, 0], p[:, 1]
     rows = _block_rows(n, block_elems)
-    reach2 = -1.0 if contact is None else (2.0 * contact[0] + contact[1]) ** 2
     for a in range(0, n, rows):
         b = min(n, a + rows)
         dx = np.subtract(x[a:b, None], x[None, :])
@@ -209,23 +203,14 @@ def _pair_forces(
         r2 = dx * dx
         r2 += dy * dy
         r2[np.arange(b - a), np.arange(a, b)] = np.inf  # no self-force
-        if contact is not None:
-            ii, jj = np.nonzero(r2 < reach2)
-            ii, jj = ii[r2[ii, jj] > 0], jj[r2[ii, jj] > 0]
-            if ii.size:
-                r = np.sqrt(r2[ii, jj])
-                mag = _firas(r - 2.0 * contact[0], contact[1], contact[2]) / r
-                np.add.at(touch[:, 0], ii + a, mag * dx[ii, jj])
-                np.add.at(touch[:, 1], ii + a, mag * dy[ii, jj])
-        if k_r != 0:
-            # coincident robots (r = 0) have dx = dy = 0: a floored r2 gives them 0 force
-            np.maximum(r2, 1e-200, out=r2)
-            w = np.sqrt(r2)
-            w *= r2
-            np.divide(q, w, out=w)  # q_i / r^3
-            coulomb[a:b, 0] = np.einsum("ij,ij->i", w, dx)
-            coulomb[a:b, 1] = np.einsum("ij,ij->i", w, dy)
-    return coulomb, touch
+        # coincident robots (r = 0) have dx = dy = 0: a floored r2 gives them 0 force
+        np.maximum(r2, 1e-200, out=r2)
+        w = np.sqrt(r2)
+        w *= r2
+        np.divide(q, w, out=w)  # q_i / r^3
+        out[a:b, 0] = np.einsum("ij,ij->i", w, dx)
+        out[a:b, 1] = np.einsum("ij,ij->i", w, dy)
+    return out
 
 
 def coulomb_repulsion(
@@ -257,7 +242,9 @@ def coulomb_repulsion(
     """
     p = _positions(pos)
     q = _charges(charge, p.shape[0])
-    coulomb, _ = _pair_forces(p, q, k_r, None, block_elems)
+    if k_r == 0:
+        return np.zeros_like(p)
+    coulomb = _coulomb_sums(p, q, block_elems)
     coulomb *= (k_r * q)[:, None]
     return coulomb
 
@@ -275,7 +262,6 @@ def contact_repulsion(
     radius_m: float,
     range_m: float,
     gain: float,
-    block_elems: int = BLOCK_ELEMS,
 ) -> FloatArray:
     """Short-range repulsion between robot bodies (FIRAS, Khatib 1986).
 
@@ -289,18 +275,34 @@ def contact_repulsion(
         Gap rho below which the force acts [m].
     gain : float
         eta [N m^2].
-    block_elems : int
-        Pairs per block of the search.
 
     Returns
     -------
     ndarray, shape (N, 2)
         ``sum_i eta (1/g - 1/rho) / g^2 * (p_k - p_i) / |p_k - p_i|`` over the robots
         i with gap g < rho [N] (g is floored at 1 mm, where the force is capped).
+
+    Notes
+    -----
+    The pairs within reach come from a k-d tree (``scipy.spatial.cKDTree``), in
+    O(N log N) time and O(pairs) memory.
     """
     p = _positions(pos)
-    _, touch = _pair_forces(p, np.zeros(p.shape[0]), 0.0, (radius_m, range_m, gain), block_elems)
-    return touch
+    out = np.zeros_like(p)
+    if p.shape[0] < 2 or gain == 0:
+        return out
+    pairs = cKDTree(p).query_pairs(2.0 * radius_m + range_m, output_type="ndarray")
+    if pairs.shape[0] == 0:
+        return out
+    k, i = pairs[:, 0], pairs[:, 1]
+    d = p[k] - p[i]
+    r = np.sqrt((d * d).sum(axis=1))
+    keep = r > 0  # coincident bodies: no defined direction
+    k, i, d, r = k[keep], i[keep], d[keep], r[keep]
+    push = (_firas(r - 2.0 * radius_m, range_m, gain) / r)[:, None] * d
+    np.add.at(out, k, push)
+    np.add.at(out, i, -push)
+    return out
 
 
 def obstacle_repulsion(
@@ -429,18 +431,14 @@ def formation_force(
         limit_n=params.attraction_limit_n,
     )
     q = np.where(alive, params.charge_c, 0.0)
-    contact = (
-        (radius, params.contact_range_m, params.contact_gain)
-        if law == "regular" and params.contact_gain > 0
-        else None
-    )
-    coulomb, touch = _pair_forces(p, q, params.k_r, contact, block_elems)
-    rep = coulomb * (params.k_r * q)[:, None]
+    rep = coulomb_repulsion(p, k_r=params.k_r, charge=q, block_elems=block_elems)
     if law == "deliverable":
         f += rep
     else:
         f += params.spacing_gain * tangential_part(rep, p, c)
-        f += touch
+        f += contact_repulsion(
+            p, radius_m=radius, range_m=params.contact_range_m, gain=params.contact_gain
+        )
     if obstacles is not None:
         f += obstacle_repulsion(
             p,
