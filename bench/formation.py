@@ -1,11 +1,11 @@
 """Benchmark: the formation law at swarm scale (issue 4), against textbook NumPy.
 
 For teams of N = 10, 100, 1,000 and 5,000 robots, uniformly at random in a square of
-side 10 sqrt(N) m (constant density) about a fixed leader (alpha = 3 m, attraction capped at 10 N as in the built-in
-scenarios):
+side 10 sqrt(N) m (constant density) about a fixed leader (alpha = 3 m, attraction
+capped at 10 N as in the built-in scenarios):
 
 1. Steps per second of one formation step: the force of the law (the deliverable's
-   eqs. 6-8, and the regular law with its contact force) plus the exact point-mass step
+   eqs. 6-8, and the regular law with its k-d-tree contact force) plus the point-mass step
    of eq. 5 (``mass_damper_step``), best of several timed runs.
 2. Peak memory of one step: the tracemalloc peak (NumPy allocations) and the process's
    peak resident set size after the run.
