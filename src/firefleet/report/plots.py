@@ -167,6 +167,10 @@ def figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
         from firefleet.report import path_following
 
         return path_following.figures(result)
+    if cmd.kind == "formation":
+        from firefleet.report.formation import formation_figures
+
+        return formation_figures(result, metrics)
     if not isinstance(cmd, VoltageStep | WheelSpeedStep):
         raise ValueError(f"no figures for a {cmd.kind} scenario")
     out = {"response.png": _motor_response(result)}

@@ -28,8 +28,9 @@ import pydantic
 import yaml
 from numpy.typing import NDArray
 
+from firefleet.control.formation import FormationParams
 from firefleet.control.pid import PidParams
-from firefleet.errors import InputError
+from firefleet.errors import InputError, check_fields
 from firefleet.models.encoder import EncoderParams
 from firefleet.models.kinematics import RobotGeometry
 from firefleet.models.motor import MotorParams
@@ -195,8 +196,124 @@ class PathFollowing:
             raise InputError(f"arrival_radius_m must be > 0, got {self.arrival_radius_m}")
 
 
+# --- formation control (issue 4): the command of the formation-* scenarios ---------------
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class CircleObstacle:
+    """A circular obstacle: centre (``x_m``, ``y_m``) and ``radius_m`` [m]."""
+
+    x_m: float
+    y_m: float
+    radius_m: float
+
+    def __post_init__(self) -> None:
+        check_fields(self, "obstacle", positive=("radius_m",))
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class LeaderPath:
+    """The virtual leader: at ``waypoints_m[0]`` until ``start_s``, then along the
+    polyline through the waypoints at ``speed_m_s`` (reached and left with
+    ``accel_m_s2``), stopping at the last one."""
+
+    waypoints_m: tuple[tuple[float, float], ...] = ((0.0, 0.0),)
+    speed_m_s: float = 0.0
+    accel_m_s2: float = 0.2
+    start_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.waypoints_m:
+            raise InputError("leader.waypoints_m must list at least one point")
+        if not all(math.isfinite(v) for w in self.waypoints_m for v in w):
+            raise InputError("leader.waypoints_m must be finite numbers")
+        check_fields(
+            self, "leader", positive=("accel_m_s2",), non_negative=("speed_m_s", "start_s")
+        )
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class RobotFailure:
+    """Robot ``robot`` (numbered from 1) stops at ``time_s`` and leaves the formation."""
+
+    robot: int
+    time_s: float
+
+    def __post_init__(self) -> None:
+        if self.robot < 1:
+            raise InputError(f"failure.robot is numbered from 1, got {self.robot}")
+        check_fields(self, "failure", non_negative=("time_s",))
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class Formation:
+    """Formation about a virtual leader (section 2.3; firefleet.control.formation).
+
+    The team is ``Scenario.poses`` (its size, and the start headings of diff-drive
+    robots). With ``scatter_m > 0`` the start positions are not the poses' but drawn,
+    with the scenario's ``seed``, uniformly in the square of half-width ``scatter_m``
+    about the leader's start, at least two body radii plus ``contact_range_m`` apart
+    (the deliverable's "arbitrary" starts). Metrics on the formation's shape are taken
+    from ``formed_by_s`` to the end (the formation must have formed by then).
+    """
+
+    kind: Literal["formation"]
+    law: Literal["deliverable", "regular"] = "deliverable"
+    robot_model: Literal["point-mass", "diff-drive"] = "point-mass"
+    alpha_m: float = 3.0
+    k_r: float = 10.0
+    charge_c: float = 1.0
+    attraction_gain: float = 1.0
+    attraction_limit_n: float | None = None
+    spacing_gain: float = 1.0
+    robot_radius_m: float = 0.15
+    contact_gain: float = 0.05
+    contact_range_m: float = 0.5
+    mass_kg: float = 1.0
+    damping_n_s_m: float = 1.0
+    kd_n_s_m: float = 1.0
+    look_ahead_m: float = 0.1
+    max_speed_m_s: float = 0.5
+    scatter_m: float = 0.0
+    leader: LeaderPath = field(default_factory=LeaderPath)
+    obstacles: tuple[CircleObstacle, ...] = ()
+    failure: RobotFailure | None = None
+    formed_by_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_fields(
+            self,
+            "",
+            positive=("look_ahead_m", "max_speed_m_s", "mass_kg"),
+            non_negative=("scatter_m", "formed_by_s", "damping_n_s_m", "kd_n_s_m"),
+        )
+        if self.damping_n_s_m + self.kd_n_s_m <= 0:
+            raise InputError("damping_n_s_m + kd_n_s_m must be > 0")
+        _ = self.formation_params  # checks alpha_m, k_r, ... naming the field
+
+    @property
+    def formation_params(self) -> FormationParams:
+        """The law's parameters (firefleet.control.formation.FormationParams)."""
+        return FormationParams(
+            alpha_m=self.alpha_m,
+            k_r=self.k_r,
+            charge_c=self.charge_c,
+            attraction_gain=self.attraction_gain,
+            attraction_limit_n=(
+                math.inf if self.attraction_limit_n is None else self.attraction_limit_n
+            ),
+            spacing_gain=self.spacing_gain,
+            robot_radius_m=self.robot_radius_m,
+            contact_gain=self.contact_gain,
+            contact_range_m=self.contact_range_m,
+        )
+
+
+# --- end of formation control ------------------------------------------------------------
+
+
 Command = Annotated[
-    VoltageStep | WheelSpeedStep | PathFollowing, pydantic.Field(discriminator="kind")
+    VoltageStep | WheelSpeedStep | PathFollowing | Formation, pydantic.Field(discriminator="kind")
 ]
 
 
@@ -241,6 +358,13 @@ METRICS: dict[str, tuple[str, ...]] = {
         "odometry_drift_m",
         "peak_current_a",
         "max_voltage_v",
+    ),
+    "formation": (
+        "radius_error_max_m",
+        "spacing_error_max_deg",
+        "min_clearance_m",
+        "radius_settling_time_s",
+        "final_radius_m",
     ),
 }
 

@@ -35,8 +35,15 @@ from firefleet.errors import InputError
 from firefleet.models.encoder import encoder_init, encoder_step
 from firefleet.models.kinematics import diff_drive_step
 from firefleet.models.motor import discretise_motor, motor_step
-from firefleet.scenarios.schema import PathFollowing, Scenario, VoltageStep, WheelSpeedStep
+from firefleet.scenarios.schema import (
+    Formation,
+    PathFollowing,
+    Scenario,
+    VoltageStep,
+    WheelSpeedStep,
+)
 from firefleet.sim.cooperative import simulate_path_following
+from firefleet.sim.formation import simulate_formation
 from firefleet.sim.result import SimResult
 
 __all__ = ["SCALAR_MAX_ROBOTS", "ProgressCallback", "simulate"]
@@ -91,6 +98,8 @@ def simulate(
         return _simulate_motors(scenario, rec_steps, progress, backend)
     if isinstance(cmd, PathFollowing):
         return simulate_path_following(scenario, rec_steps, progress)
+    if isinstance(cmd, Formation):
+        return simulate_formation(scenario, rec_steps, progress)
     raise InputError(f"no simulator for a {cmd.kind} scenario")
 
 
@@ -115,6 +124,7 @@ def _simulate_motors(
     motor = discretise_motor(scenario.motor, dt)
     pid_params = scenario.speed_pid
     cmd = scenario.command
+    assert isinstance(cmd, VoltageStep | WheelSpeedStep)  # the dispatch in simulate()
     open_loop = isinstance(cmd, VoltageStep)
     step_value = cmd.voltage_v if isinstance(cmd, VoltageStep) else cmd.speed_rad_s
     pose = scenario.initial_poses
@@ -207,6 +217,7 @@ def _simulate_scalar(
     tt, lim = g.tracking_time_s, g.output_limit
     radius, axle = scenario.robot.wheel_radius_m, scenario.robot.axle_length_m
     cmd = scenario.command
+    assert isinstance(cmd, VoltageStep | WheelSpeedStep)  # the dispatch in simulate()
     open_loop = isinstance(cmd, VoltageStep)
     step_value = cmd.voltage_v if isinstance(cmd, VoltageStep) else cmd.speed_rad_s
     load_value, load_start = scenario.load.torque_n_m, scenario.load.start_s

@@ -9,8 +9,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError, as_float_array
-from firefleet.scenarios.schema import Claim, PathFollowing, VoltageStep, WheelSpeedStep
+from firefleet.scenarios.schema import (
+    Claim,
+    Formation,
+    PathFollowing,
+    VoltageStep,
+    WheelSpeedStep,
+)
 from firefleet.sim.cooperative import path_following_metrics
+from firefleet.sim.formation import formation_metrics
 from firefleet.sim.result import SimResult
 
 __all__ = [
@@ -140,6 +147,8 @@ def compute_metrics(result: SimResult) -> Metrics:
         return dict(_motor_metrics(result))
     if isinstance(cmd, PathFollowing):
         return path_following_metrics(result)
+    if isinstance(cmd, Formation):
+        return formation_metrics(result)
     raise InputError(f"no metrics for a {cmd.kind} scenario")
 
 

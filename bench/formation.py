@@ -1,0 +1,234 @@
+"""Benchmark: the formation law at swarm scale (issue 4), against textbook NumPy.
+
+For teams of N = 10, 100, 1,000 and 5,000 robots, uniformly at random in a square of
+side 10 sqrt(N) m (constant density) about a fixed leader (alpha = 3 m, attraction
+capped at 10 N as in the built-in scenarios):
+
+1. Steps per second of one formation step: the force of the law (the deliverable's
+   eqs. 6-8, and the regular law with its k-d-tree contact force) plus the point-mass step
+   of eq. 5 (``mass_damper_step``), best of several timed runs.
+2. Peak memory of one step: the tracemalloc peak (NumPy allocations) and the process's
+   peak resident set size after the run.
+3. Peer: the Coulomb sum of eqs. 7-8 written the textbook way, with NumPy broadcasting
+   over an (N, N, 2) array of differences (what one writes without blocking). Its time
+   and tracemalloc peak are measured on the same positions, and its forces compared with
+   ours; ratios are ours / peer.
+
+Floors (issue 4), printed PASS/FAIL: at N = 1,000 at least 100 steps/s (regular law, the
+costlier one); at N = 5,000 under 1 GiB (tracemalloc peak of a step, and the process's
+peak RSS). ``run`` returns every number; the exit status is 0 whatever the floors say.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import sys
+import time
+import tracemalloc
+from collections.abc import Callable
+from typing import Any
+
+if __name__ == "__main__":  # single-threaded BLAS, as bench/run.py sets it
+    for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_var, "1")
+
+import numpy as np
+from numpy.typing import NDArray
+from rich.console import Console
+from rich.table import Table
+
+from firefleet.control.formation import FormationParams, coulomb_repulsion, formation_force
+from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
+
+FloatArray = NDArray[np.float64]
+
+TEAM_SIZES = (10, 100, 1_000, 5_000)
+STEPS = {10: 2_000, 100: 1_000, 1_000: 100, 5_000: 10}
+"""Formation steps per timed run (about 0.1 to 1 s each)."""
+REPEATS = 3
+"""Timed runs per size and law (the best counts), after one untimed step."""
+PEER_MAX_N = 5_000
+"""Largest team the peer runs at (its (N, N, 2) arrays: 400 MB at 5,000)."""
+
+FLOOR_N, FLOOR_STEPS_PER_S = 1_000, 100.0
+MEMORY_N, FLOOR_BYTES = 5_000, 1 << 30
+DT_S = 0.01
+PARAMS = FormationParams(alpha_m=3.0, spacing_gain=5.0, attraction_limit_n=10.0)  # as the scenarios
+MASS = MassDamperParams()
+
+
+def team(n: int) -> FloatArray:
+    """Point-mass states (N, 4) at random, constant density (10 m x 10 m per robot)."""
+    side = 10.0 * np.sqrt(n)
+    rng = np.random.default_rng(n)
+    xy = rng.uniform(-side / 2, side / 2, (n, 2))
+    return np.concatenate([xy, np.zeros((n, 2))], axis=1)
+
+
+def step(state: FloatArray, law: str) -> FloatArray:
+    """One formation step of the runner's point-mass loop."""
+    force = formation_force(state[:, :2], np.zeros(2), PARAMS, law=law)  # type: ignore[arg-type]
+    return mass_damper_step(state, force, DT_S, MASS)
+
+
+def peer_coulomb(pos: FloatArray, k_r: float = 10.0) -> FloatArray:
+    """Eqs. 7-8 by broadcasting: (N, N, 2) differences, (N, N) distances."""
+    diff = pos[:, None, :] - pos[None, :, :]
+    r2 = (diff * diff).sum(axis=2)
+    np.fill_diagonal(r2, np.inf)
+    out: FloatArray = k_r * (diff / (r2 * np.sqrt(r2))[:, :, None]).sum(axis=1)
+    return out
+
+
+def best_of(fn: Callable[[], object], repeats: int) -> float:
+    """Best wall time [s] of ``repeats`` calls, after one untimed call."""
+    fn()
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return float(best)
+
+
+def traced_peak_bytes(fn: Callable[[], object]) -> int:
+    """Peak of the memory tracemalloc sees (NumPy's allocations) during one call."""
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        fn()
+        return int(tracemalloc.get_traced_memory()[1])
+    finally:
+        tracemalloc.stop()
+
+
+def max_rss_bytes() -> int:
+    """Peak resident set size of this process so far (Linux reports kB)."""
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return int(rss if sys.platform == "darwin" else rss * 1024)
+
+
+def run_laws(n: int) -> dict[str, Any]:
+    """Steps/s of both laws and the peak memory of one regular-law step, for N robots."""
+    state0 = team(n)
+    steps = STEPS[n]
+    out: dict[str, Any] = {"n_robots": n, "steps_per_run": steps}
+    for law in ("deliverable", "regular"):
+
+        def run(law: str = law) -> None:
+            s = state0
+            for _ in range(steps):
+                s = step(s, law)
+
+        best = best_of(run, REPEATS)
+        out[f"{law}_steps_per_s"] = steps / best
+        out[f"{law}_robot_steps_per_s"] = n * steps / best
+    out["step_traced_peak_bytes"] = traced_peak_bytes(lambda: step(state0, "regular"))
+    out["max_rss_after_bytes"] = max_rss_bytes()
+    return out
+
+
+def run_peer(n: int) -> dict[str, Any]:
+    """Time, memory and agreement of the broadcast Coulomb sum against ours."""
+    pos = team(n)[:, :2]
+    ours_s = best_of(lambda: coulomb_repulsion(pos), REPEATS)
+    peer_s = best_of(lambda: peer_coulomb(pos), REPEATS)
+    ours_peak = traced_peak_bytes(lambda: coulomb_repulsion(pos))
+    peer_peak = traced_peak_bytes(lambda: peer_coulomb(pos))
+    a, b = coulomb_repulsion(pos), peer_coulomb(pos)
+    return {
+        "n_robots": n,
+        "ours_coulomb_s": ours_s,
+        "peer_coulomb_s": peer_s,
+        "speed_ratio_ours_over_peer": peer_s / ours_s,
+        "ours_traced_peak_bytes": ours_peak,
+        "peer_traced_peak_bytes": peer_peak,
+        "memory_ratio_ours_over_peer": ours_peak / peer_peak,
+        "max_rel_force_difference": float(np.abs(a - b).max() / np.abs(b).max()),
+        "max_rss_after_bytes": max_rss_bytes(),
+    }
+
+
+def _mb(x: float) -> str:
+    return f"{x / 2**20:,.1f} MiB"
+
+
+def _verdict(ok: bool) -> str:
+    return "[bold green]PASS[/]" if ok else "[bold red]FAIL[/]"
+
+
+def run(console: Console) -> dict[str, Any]:
+    """Measure, print rich tables with the floors, and return every number."""
+    console.rule("formation control (issue 4)")
+    laws = []
+    for n in TEAM_SIZES:
+        console.print(f"  N = {n:>5,}: {REPEATS} timed runs of {STEPS[n]} steps per law ...")
+        laws.append(run_laws(n))
+    table = Table(title="formation step (force + eq. 5 point-mass step), single thread")
+    for col in ("N", "deliverable steps/s", "regular steps/s", "robot-steps/s (regular)"):
+        table.add_column(col, justify="right")
+    table.add_column("traced peak / step", justify="right")
+    for r in laws:
+        table.add_row(
+            f"{r['n_robots']:,}",
+            f"{r['deliverable_steps_per_s']:,.1f}",
+            f"{r['regular_steps_per_s']:,.1f}",
+            f"{r['regular_robot_steps_per_s']:,.0f}",
+            _mb(r["step_traced_peak_bytes"]),
+        )
+    console.print(table)
+
+    peers = []
+    for n in TEAM_SIZES:
+        if n <= PEER_MAX_N:
+            console.print(f"  peer (broadcast N x N x 2) at N = {n:,} ...")
+            peers.append(run_peer(n))
+    table = Table(title="Coulomb sum of eqs. 7-8: blocked (ours) vs broadcast NumPy (peer)")
+    for col in ("N", "ours", "peer", "speed ours/peer", "ours peak", "peer peak", "max rel diff"):
+        table.add_column(col, justify="right")
+    for p in peers:
+        table.add_row(
+            f"{p['n_robots']:,}",
+            f"{1e3 * p['ours_coulomb_s']:.3f} ms",
+            f"{1e3 * p['peer_coulomb_s']:.3f} ms",
+            f"{p['speed_ratio_ours_over_peer']:.2f}x",
+            _mb(p["ours_traced_peak_bytes"]),
+            _mb(p["peer_traced_peak_bytes"]),
+            f"{p['max_rel_force_difference']:.1e}",
+        )
+    console.print(table)
+
+    by_n = {r["n_robots"]: r for r in laws}
+    rate = by_n[FLOOR_N]["regular_steps_per_s"]
+    traced = by_n[MEMORY_N]["step_traced_peak_bytes"]
+    rss = by_n[MEMORY_N]["max_rss_after_bytes"]
+    floors = {
+        "steps_per_s_at_1000": {"measured": rate, "floor": FLOOR_STEPS_PER_S},
+        "traced_peak_bytes_at_5000": {"measured": traced, "ceiling": FLOOR_BYTES},
+        "max_rss_bytes_after_5000": {"measured": rss, "ceiling": FLOOR_BYTES},
+    }
+    table = Table(title="floors (issue 4)")
+    for col in ("floor", "measured", "bound", "result"):
+        table.add_column(col)
+    table.add_row(
+        "N = 1,000, regular law",
+        f"{rate:,.1f} steps/s",
+        f">= {FLOOR_STEPS_PER_S:g}",
+        _verdict(rate >= FLOOR_STEPS_PER_S),
+    )
+    table.add_row(
+        "N = 5,000, traced peak of a step", _mb(traced), "< 1 GiB", _verdict(traced < FLOOR_BYTES)
+    )
+    table.add_row(
+        "N = 5,000, process peak RSS (before the peer runs)",
+        _mb(rss),
+        "< 1 GiB",
+        _verdict(rss < FLOOR_BYTES),
+    )
+    console.print(table)
+    return {"laws": laws, "peer": peers, "floors": floors}
+
+
+if __name__ == "__main__":
+    run(Console())

@@ -1,0 +1,439 @@
+"""The formation runner and its metrics (deliverable section 2.3; issue 4).
+
+Each tick, for the whole team at once::
+
+    leader path                        c, dc/dt, d2c/dt2          (2,)
+    control.formation                  force on each formation point   (N, 2)
+    point-mass robots (eq. 5):  + feedforward (B + k_d) dc/dt + M d2c/dt2
+        -> models.mass_damper          exact step for the held force
+    diff-drive robots:  look-ahead point p = (x, y) + l (cos th, sin th)
+        u = dc/dt + f / (B + k_d)      (eq. 5 at its terminal velocity), |u| <= v_max
+        v = u . (cos th, sin th),  omega = u . (-sin th, cos th) / l
+        -> models.kinematics.body_to_wheels -> control.pid -> models.motor
+        -> models.kinematics.diff_drive_step, models.encoder (measured speeds)
+
+The feedforward makes the formation's dynamics in the leader's frame those of a fixed
+leader (the damping acts on the velocity relative to the leader), so the formation
+travels with a moving leader. A diff-drive robot's formation point is its look-ahead
+point, a point ``l`` ahead of the axle centre (Lawton, Beard and Young, "A decentralized
+approach to formation maneuvers", IEEE Trans. Robotics and Automation 19(6), 2003):
+its velocity is any u the wheels can give, so the point-mass law carries over.
+
+A failed robot stops where it is (a point mass is held; a diff-drive robot's wheel
+references drop to 0) and leaves the formation: it carries no charge and has no place
+on the circle, but its body stays, and the contact and obstacle forces see it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from firefleet.control.formation import formation_force
+from firefleet.control.pid import pid_init, pid_step
+from firefleet.errors import InputError
+from firefleet.models.encoder import encoder_init, encoder_step
+from firefleet.models.kinematics import body_to_wheels, diff_drive_step
+from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
+from firefleet.models.motor import discretise_motor, motor_step
+from firefleet.scenarios.schema import Formation, LeaderPath, Scenario
+from firefleet.sim.result import SimResult
+
+__all__ = [
+    "RADIUS_BAND",
+    "formation_metrics",
+    "leader_trajectory",
+    "simulate_formation",
+    "spacing_error_deg",
+    "start_positions",
+]
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+Progress = Callable[[int, int], None]
+
+RADIUS_BAND = 0.05
+"""Band of ``radius_settling_time_s``: within 5 % of alpha (the issue's bound)."""
+
+_MAX_PLACEMENT_ROUNDS = 10_000
+
+
+def _command(scenario: Scenario) -> Formation:
+    cmd = scenario.command
+    if not isinstance(cmd, Formation):
+        raise InputError(f"not a formation scenario: command kind {cmd.kind!r}")
+    return cmd
+
+
+def leader_trajectory(
+    path: LeaderPath, t_s: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The virtual leader's position, velocity and acceleration at times ``t_s``.
+
+    The leader waits at the first waypoint until ``start_s``, then runs along the
+    polyline with a trapezoidal speed profile (``accel_m_s2`` up to ``speed_m_s``,
+    cruise, ``accel_m_s2`` down to rest at the last waypoint; a triangle if the path is
+    too short to reach the speed).
+
+    Parameters
+    ----------
+    path : LeaderPath
+    t_s : ndarray, shape (T,)
+        Times [s].
+
+    Returns
+    -------
+    xy_m, v_m_s, a_m_s2 : ndarray, shape (T, 2)
+        Position [m], velocity [m/s] and acceleration [m/s^2]. The turn at a corner
+        is instantaneous: the velocity changes direction in one step, with no
+        acceleration reported, so point-mass robots swing out at a corner (their
+        feedforward cannot give a velocity step); diff-drive robots, whose formation
+        point follows a velocity command, take it in their stride.
+    """
+    t = np.asarray(t_s, dtype=np.float64)
+    pts = np.array(path.waypoints_m, dtype=np.float64).reshape(-1, 2)
+    seg = np.diff(pts, axis=0)
+    seg_len = np.sqrt((seg * seg).sum(axis=1))
+    keep = seg_len > 0
+    seg, seg_len, starts = seg[keep], seg_len[keep], pts[:-1][keep]
+    total = float(seg_len.sum())
+    xy = np.repeat(pts[:1], t.size, axis=0)
+    vel = np.zeros((t.size, 2))
+    acc = np.zeros((t.size, 2))
+    if total == 0.0 or path.speed_m_s == 0.0:
+        return xy, vel, acc
+    a = path.accel_m_s2
+    v = min(path.speed_m_s, math.sqrt(a * total))  # peak speed (triangle if short)
+    t_acc = v / a
+    d_acc = 0.5 * v * t_acc
+    t_cruise = (total - 2.0 * d_acc) / v
+    tau = np.clip(t - path.start_s, 0.0, None)
+    t_end = 2.0 * t_acc + t_cruise
+    tau = np.minimum(tau, t_end)
+    up = tau < t_acc
+    down = tau > t_acc + t_cruise
+    td = tau - t_acc - t_cruise
+    s = np.where(
+        up,
+        0.5 * a * tau * tau,
+        np.where(
+            down, d_acc + v * t_cruise + v * td - 0.5 * a * td * td, d_acc + v * (tau - t_acc)
+        ),
+    )
+    sdot = np.where(up, a * tau, np.where(down, v - a * td, v))
+    sddot = np.where(up, a, np.where(down, -a, 0.0))
+    moving = (t > path.start_s) & (t - path.start_s < t_end)
+    sdot = np.where(moving, sdot, 0.0)
+    sddot = np.where(moving, sddot, 0.0)
+    s = np.clip(s, 0.0, total)
+    cum = np.r_[0.0, np.cumsum(seg_len)]
+    i = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, seg_len.size - 1)
+    u = seg / seg_len[:, None]
+    xy = starts[i] + u[i] * (s - cum[i])[:, None]
+    vel = u[i] * sdot[:, None]
+    acc = u[i] * sddot[:, None]
+    return xy, vel, acc
+
+
+def start_positions(scenario: Scenario, rng: np.random.Generator) -> FloatArray:
+    """Start poses (N, 3): the scenario's, or drawn about the leader with ``scatter_m``.
+
+    With ``scatter_m > 0`` the x, y of each robot are drawn uniformly in the square of
+    half-width ``scatter_m`` about the leader's start, redrawing (all at once) the
+    robots that overlap another robot or an obstacle (bodies closer than
+    ``contact_range_m``), until none does; headings stay the poses'.
+
+    Raises
+    ------
+    InputError
+        If the robots cannot be placed (a square too small for the team).
+    """
+    cmd = _command(scenario)
+    poses = scenario.initial_poses
+    if cmd.scatter_m == 0:
+        return poses
+    n = poses.shape[0]
+    centre = np.array(cmd.leader.waypoints_m[0], dtype=np.float64)
+    sep = 2.0 * cmd.robot_radius_m + cmd.contact_range_m
+    obs = np.array([(o.x_m, o.y_m) for o in cmd.obstacles], dtype=np.float64).reshape(-1, 2)
+    obs_r = np.array([o.radius_m for o in cmd.obstacles], dtype=np.float64)
+    xy = centre + rng.uniform(-cmd.scatter_m, cmd.scatter_m, size=(n, 2))
+    for _ in range(_MAX_PLACEMENT_ROUNDS):
+        d = np.sqrt(((xy[:, None, :] - xy[None, :, :]) ** 2).sum(axis=2))
+        np.fill_diagonal(d, np.inf)
+        # of each too-close pair, redraw the later robot
+        bad = np.triu(d < sep).any(axis=0)
+        if obs.shape[0]:
+            do = np.sqrt(((xy[:, None, :] - obs[None, :, :]) ** 2).sum(axis=2))
+            bad |= (do - obs_r[None, :] < cmd.robot_radius_m + cmd.contact_range_m).any(axis=1)
+        if not bad.any():
+            out = poses.copy()
+            out[:, :2] = xy
+            return out
+        xy[bad] = centre + rng.uniform(-cmd.scatter_m, cmd.scatter_m, size=(int(bad.sum()), 2))
+    raise InputError(
+        f"command.scatter_m = {cmd.scatter_m} m: cannot place {n} robots "
+        f"{sep:g} m apart in the square"
+    )
+
+
+def _check_team(scenario: Scenario, cmd: Formation) -> None:
+    n = scenario.n_robots
+    if cmd.failure is not None and cmd.failure.robot > n:
+        raise InputError(
+            f"command.failure.robot = {cmd.failure.robot}, but the team has {n} robot(s)"
+        )
+    if cmd.formed_by_s > scenario.duration_s:
+        raise InputError(
+            f"command.formed_by_s = {cmd.formed_by_s} s is after the end of the run "
+            f"({scenario.duration_s} s)"
+        )
+
+
+def simulate_formation(
+    scenario: Scenario, rec_steps: NDArray[np.int64], progress: Progress | None
+) -> SimResult:
+    """Run a formation scenario (see the module notes).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        With a :class:`~firefleet.scenarios.schema.Formation` command.
+    rec_steps : ndarray of int, shape (T,)
+        The steps to record, increasing, from 0 to ``scenario.n_steps``.
+    progress : callable, optional
+        ``progress(done, total)``, about a hundred times a run.
+
+    Returns
+    -------
+    SimResult
+        ``pose`` (T, N, 3) (a point mass's heading is its direction of motion), wheel
+        arrays (T, N, 2) for diff-drive robots and (T, N, 0) for point masses, and in
+        ``extra``: ``leader_xy`` (T, 2) [m], ``formation_xy_m`` (T, N, 2) (the points
+        the law moves: the robot itself, or its look-ahead point) and ``robot_active``
+        (T, N) (1 while in the team, 0 after a failure).
+    """
+    cmd = _command(scenario)
+    _check_team(scenario, cmd)
+    rng = np.random.default_rng(scenario.seed)
+    pose = start_positions(scenario, rng)
+    n, dt, n_steps = scenario.n_robots, scenario.dt_s, scenario.n_steps
+    params = cmd.formation_params
+    steps_t = np.arange(n_steps + 1, dtype=np.float64) * dt
+    leader, leader_v, leader_a = leader_trajectory(cmd.leader, steps_t)
+    obstacles = None
+    if cmd.obstacles:
+        obstacles = (
+            np.array([(o.x_m, o.y_m) for o in cmd.obstacles], dtype=np.float64),
+            np.array([o.radius_m for o in cmd.obstacles], dtype=np.float64),
+        )
+    damping = cmd.damping_n_s_m + cmd.kd_n_s_m
+    failed = np.zeros(n, dtype=bool)
+    fail_step = n_steps + 1
+    if cmd.failure is not None:
+        failed[cmd.failure.robot - 1] = True
+        fail_step = math.ceil(cmd.failure.time_s / dt - 1e-9)
+    diff_drive = cmd.robot_model == "diff-drive"
+    look = cmd.look_ahead_m if diff_drive else 0.0
+    body = cmd.robot_radius_m + look
+
+    n_rec = rec_steps.size
+    n_wheels = 2 if diff_drive else 0
+    rec_pose = np.empty((n_rec, n, 3))
+    rec_point = np.empty((n_rec, n, 2))
+    rec_active = np.empty((n_rec, n))
+    wheels = {
+        k: np.empty((n_rec, n, n_wheels))
+        for k in ("speed", "measured", "ref", "current", "voltage", "load")
+    }
+    report_every = max(1, n_steps // 100)
+
+    md = MassDamperParams(
+        mass_kg=cmd.mass_kg, damping_n_s_m=cmd.damping_n_s_m, kd_n_s_m=cmd.kd_n_s_m
+    )
+    state = np.concatenate([pose[:, :2], np.zeros((n, 2))], axis=1)
+    # the diff-drive stack (built only for diff-drive robots)
+    motor = discretise_motor(scenario.motor, dt)
+    enc = scenario.encoder
+    count_rad = 2.0 * np.pi / enc.counts_per_rev if enc.counts_per_rev else 0.0
+    encoder = encoder_init(rng.uniform(0.0, count_rad, size=(n, 2)), enc) if diff_drive else None
+    current = np.zeros((n, 2))
+    speed = np.zeros((n, 2))
+    measured = np.zeros((n, 2))
+    pid = pid_init(measured)
+    w_max = cmd.max_speed_m_s / scenario.robot.wheel_radius_m
+    zero_load = np.zeros((n, 2))
+
+    row = 0
+    for k in range(n_steps + 1):
+        active = ~failed if k >= fail_step else np.ones(n, dtype=bool)
+        heading = pose[:, 2]
+        point = pose[:, :2] + look * np.stack([np.cos(heading), np.sin(heading)], axis=1)
+        force = formation_force(
+            point,
+            leader[k],
+            params,
+            law=cmd.law,
+            active=active,
+            obstacles=obstacles,
+            body_radius_m=body,
+        )
+        if diff_drive:
+            u = leader_v[k] + force / damping
+            speed_u = np.sqrt((u * u).sum(axis=1))
+            u *= np.minimum(1.0, cmd.max_speed_m_s / np.maximum(speed_u, 1e-300))[:, None]
+            c, s = np.cos(heading), np.sin(heading)
+            v = c * u[:, 0] + s * u[:, 1]
+            omega = (-s * u[:, 0] + c * u[:, 1]) / look
+            ref = body_to_wheels(v, omega, scenario.robot)
+            # keep the turn: scale both wheels down together to the speed limit
+            peak = np.abs(ref).max(axis=1)
+            ref *= np.minimum(1.0, w_max / np.maximum(peak, 1e-300))[:, None]
+            ref[~active] = 0.0
+            pid, voltage = pid_step(pid, ref, measured, scenario.speed_pid, dt)
+        else:
+            force[active] += damping * leader_v[k] + cmd.mass_kg * leader_a[k]
+        if row < n_rec and rec_steps[row] == k:
+            rec_pose[row] = pose
+            rec_point[row] = point
+            rec_active[row] = active
+            if diff_drive:
+                for key, arr in (
+                    ("speed", speed),
+                    ("measured", measured),
+                    ("ref", ref),
+                    ("current", current),
+                    ("voltage", voltage),
+                    ("load", zero_load),
+                ):
+                    wheels[key][row] = arr
+            row += 1
+        if k == n_steps:
+            break
+        if diff_drive:
+            assert encoder is not None
+            current, speed, dphi = motor_step(current, speed, voltage, zero_load, motor)
+            pose = diff_drive_step(pose, dphi, scenario.robot)
+            encoder, _, measured = encoder_step(encoder, dphi, enc, dt)
+        else:
+            new = mass_damper_step(state, force, dt, md)
+            new[~active] = np.concatenate(
+                [state[~active, :2], np.zeros((int((~active).sum()), 2))], axis=1
+            )
+            state = new
+            vx, vy = state[:, 2], state[:, 3]
+            moving = vx * vx + vy * vy > 1e-12
+            pose = np.column_stack([state[:, :2], np.where(moving, np.arctan2(vy, vx), pose[:, 2])])
+        if progress is not None and (k + 1) % report_every == 0:
+            progress(k + 1, n_steps)
+    if progress is not None:
+        progress(n_steps, n_steps)
+
+    return SimResult(
+        scenario=scenario,
+        t=np.asarray(rec_steps * dt, dtype=np.float64),
+        pose=rec_pose,
+        wheel_speed_rad_s=wheels["speed"],
+        wheel_speed_measured_rad_s=wheels["measured"],
+        wheel_speed_ref_rad_s=wheels["ref"],
+        current_a=wheels["current"],
+        voltage_v=wheels["voltage"],
+        load_torque_n_m=wheels["load"],
+        extra={
+            "leader_xy": leader[rec_steps],
+            "formation_xy_m": rec_point,
+            "robot_active": rec_active,
+        },
+    )
+
+
+def spacing_error_deg(points: FloatArray, leader_xy: FloatArray) -> FloatArray:
+    """Largest deviation of the angular gaps between neighbours from 360 / N [deg].
+
+    Parameters
+    ----------
+    points : ndarray, shape (T, N, 2)
+        Formation points [m].
+    leader_xy : ndarray, shape (T, 2)
+        Leader [m].
+
+    Returns
+    -------
+    ndarray, shape (T,)
+        ``max_k |gap_k - 360 / N|`` where the gaps are the differences of the sorted
+        angles of the robots about the leader (wrapping around); 0 for one robot.
+    """
+    d = points - leader_xy[:, None, :]
+    ang = np.sort(np.degrees(np.arctan2(d[..., 1], d[..., 0])), axis=1)
+    n = ang.shape[1]
+    if n < 2:
+        return np.zeros(ang.shape[0])
+    gaps = np.diff(np.concatenate([ang, ang[:, :1] + 360.0], axis=1), axis=1)
+    return np.asarray(np.abs(gaps - 360.0 / n).max(axis=1), dtype=np.float64)
+
+
+def _min_clearance(result: SimResult, cmd: Formation) -> float:
+    """Smallest gap between two robot bodies or a body and an obstacle over the run [m]."""
+    centres = result.pose[:, :, :2]
+    n = centres.shape[1]
+    best = math.inf
+    radius = cmd.robot_radius_m
+    if n >= 2:
+        for xy in centres:
+            dist, _ = cKDTree(xy).query(xy, k=2)
+            best = min(best, float(dist[:, 1].min()) - 2.0 * radius)
+    for o in cmd.obstacles:
+        d = np.sqrt(((centres - np.array([o.x_m, o.y_m])) ** 2).sum(axis=2))
+        best = min(best, float(d.min()) - radius - o.radius_m)
+    return best
+
+
+def formation_metrics(result: SimResult) -> dict[str, float | list[float]]:
+    """The metrics of a formation run.
+
+    Shape metrics use the formation points of the robots in the team (a failed robot
+    drops out from its failure on) at the samples from ``formed_by_s`` on:
+
+    - ``radius_error_max_m``: largest ``| |p_k - c| - alpha |``;
+    - ``spacing_error_max_deg``: largest deviation from 360 / N of the angle between
+      neighbours about the leader (N the robots in the team at that sample);
+    - ``radius_settling_time_s``: time from the start until every robot in the team is
+      within 5 % of alpha of the circle for good (``inf`` if not by the end);
+    - ``final_radius_m``: each robot's distance from the leader at the end (a list,
+      robot 1 first);
+    - ``min_clearance_m``: over the whole run and every robot (failed ones too), the
+      smallest gap between two bodies (``|p_k - p_i| - 2 R``) or between a body and an
+      obstacle (``|p_k - o| - R - R_o``), from the robots' centres; > 0 means no
+      contact.
+    """
+    cmd = _command(result.scenario)
+    t = result.t
+    points = np.asarray(result.extra["formation_xy_m"])
+    leader = np.asarray(result.extra["leader_xy"])
+    active = np.asarray(result.extra["robot_active"]) > 0.5
+    r = np.sqrt(((points - leader[:, None, :]) ** 2).sum(axis=2))
+    err = np.where(active, np.abs(r - cmd.alpha_m), 0.0)
+    window = t >= cmd.formed_by_s - 1e-9
+    spacing = np.zeros(t.size)
+    for pattern in np.unique(active, axis=0):
+        rows = (active == pattern).all(axis=1)
+        spacing[rows] = spacing_error_deg(points[rows][:, pattern], leader[rows])
+    worst = err.max(axis=1)
+    outside = np.nonzero(worst > RADIUS_BAND * cmd.alpha_m)[0]
+    if outside.size == 0:
+        settle = 0.0
+    elif outside[-1] == t.size - 1:
+        settle = math.inf
+    else:
+        settle = float(t[outside[-1] + 1])
+    return {
+        "radius_error_max_m": float(worst[window].max()),
+        "spacing_error_max_deg": float(spacing[window].max()),
+        "min_clearance_m": _min_clearance(result, cmd),
+        "radius_settling_time_s": settle,
+        "final_radius_m": [float(v) for v in r[-1]],
+    }
