@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
 
-from firefleet import load_scenario, simulate
+from firefleet import compute_metrics, load_scenario, simulate
 from firefleet.errors import InputError
 from firefleet.scenarios import parse_scenario
 from firefleet.scenarios.schema import PathFollowing
@@ -109,3 +110,20 @@ def test_parallel_kernel_equals_serial(monkeypatch: pytest.MonkeyPatch) -> None:
     serial = simulate(big).arrays()
     for key in parallel:
         np.testing.assert_array_equal(parallel[key], serial[key], err_msg=key)
+
+
+def test_robot_turned_away_from_its_path_waits_then_is_not_stranded() -> None:
+    # robot 1 of experiment 2 starts below its path facing down (heading -pi/2): along its
+    # heading (eq. 10) its point is behind it for good; along the path it is ahead of its
+    # point only until the schedule passes it, then it turns back and catches the path
+    scn = load_scenario("coop-same-path")
+    m = compute_metrics(simulate(scn))
+    wait, capture = m["wait_time_s"], m["capture_time_s"]
+    assert isinstance(wait, list)
+    assert isinstance(capture, list)
+    assert wait[0] > 0
+    assert math.isfinite(capture[0])
+    assert capture[0] > wait[0]
+    rms = m["cross_track_rms_after_capture_m"]
+    assert isinstance(rms, list)
+    assert rms[0] <= 0.03
