@@ -189,7 +189,7 @@ def _cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
                 )
             )
             mark = "[green]ok" if _all_passed(document) else "[red]CLAIM FAILED"
-            out.print(f"{scn.reproduces:>10}  {scn.name:<24} {mark}")
+            out.print(f"{scn.name:<24} {mark}  {escape(scn.reproduces)}")
         index = render_index(entries, version=firefleet.__version__)
         (stage / "index.html").write_text(index, encoding="utf-8")
     total = sum(len(e.document["claims"]) for e in entries)
