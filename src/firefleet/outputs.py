@@ -19,7 +19,7 @@ from typing import Any
 
 from firefleet.errors import InputError
 
-__all__ = ["json_text", "staged_dir"]
+__all__ = ["json_text", "staged_dir", "write_text_atomic"]
 
 
 def _finite_or_none(value: Any) -> Any:
@@ -69,3 +69,25 @@ def staged_dir(destination: str | Path) -> Iterator[Path]:
                 os.replace(path, target)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+
+
+def write_text_atomic(dest: str | Path, text: str) -> None:
+    """Write ``text`` to a temporary file beside ``dest``, then rename it into place.
+
+    Raises
+    ------
+    InputError
+        If the folder cannot be written to.
+    """
+    dest = Path(dest)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent)
+    except OSError as exc:
+        raise InputError(f"{dest}: cannot write: {exc.strerror}") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
+            handle.write(text)
+        os.replace(tmp, dest)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

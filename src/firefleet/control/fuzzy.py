@@ -54,9 +54,7 @@ import functools
 import io
 import logging
 import math
-import os
 import re
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -67,6 +65,7 @@ import scipy.special
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError
+from firefleet.outputs import write_text_atomic
 
 __all__ = [
     "FuzzyInput",
@@ -1003,22 +1002,7 @@ def write_fis(system: SugenoSystem, path: str | Path) -> None:
     InputError
         If the folder does not exist or cannot be written.
     """
-    _write_atomic(Path(path), fis_text(system))
-
-
-def _write_atomic(dest: Path, text: str) -> None:
-    """Write ``text`` to a temporary file beside ``dest``, then rename it into place."""
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent)
-    except OSError as exc:
-        raise InputError(f"{dest}: cannot write: {exc.strerror}") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as handle:
-            handle.write(text)
-        os.replace(tmp, dest)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_text_atomic(path, fis_text(system))
 
 
 def read_fis(path: str | Path) -> SugenoSystem:
@@ -1563,5 +1547,5 @@ def evaluate_csv_file(system: SugenoSystem, in_path: str | Path, out_path: str |
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{src}: cannot read: {exc}") from None
     table = evaluate_csv(system, text, origin=str(src))
-    _write_atomic(Path(out_path), table)
+    write_text_atomic(out_path, table)
     return table.count("\n") - 1

@@ -48,6 +48,7 @@ import yaml
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError, as_float_array
+from firefleet.outputs import write_text_atomic
 
 __all__ = [
     "CALIBRATION_FORMAT",
@@ -242,10 +243,7 @@ def save_calibration(calib: StereoCalibration, path: str | Path) -> None:
         "translation_m": calib.translation_m.tolist(),
         "rms_reprojection_px": None if math.isnan(calib.rms_px) else float(calib.rms_px),
     }
-    p = Path(path)
-    tmp = p.with_name(f".{p.name}.tmp")
-    tmp.write_text(yaml.safe_dump(doc, sort_keys=False), encoding="utf-8")
-    tmp.replace(p)
+    write_text_atomic(path, yaml.safe_dump(doc, sort_keys=False))
 
 
 def load_calibration(path: str | Path) -> StereoCalibration:
