@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 
 from firefleet.control.pid import PidParams, pid_init, pid_step
 from firefleet.errors import InputError, check_fields
-from firefleet.estimation.logs import SlamLog
+from firefleet.estimation.logs import SlamLog, read_log
 from firefleet.estimation.particle_filter import (
     OdometryNoise,
     odometry_covariance,
@@ -56,6 +56,8 @@ __all__ = [
     "DriveResult",
     "RangeBearingSensor",
     "loop_landmarks",
+    "SIM_LOOP",
+    "load_or_simulate_log",
     "loop_path",
     "simulate_drive",
 ]
@@ -430,3 +432,22 @@ def _record(
         truth_landmark_ids=np.arange(lms.shape[0], dtype=np.int64),
         truth_landmarks=lms,
     )
+
+
+SIM_LOOP = "sim-loop"
+"""Name that stands for a freshly simulated drive of the default loop."""
+
+
+def load_or_simulate_log(name: str, *, seed: int = 0) -> SlamLog:
+    """Read the log at path ``name``, or simulate the default loop for ``"sim-loop"``.
+
+    Parameters
+    ----------
+    name : str
+        A log path (see :func:`firefleet.estimation.logs.read_log`) or :data:`SIM_LOOP`.
+    seed : int
+        Seed of the simulated drive.
+    """
+    if name == SIM_LOOP:
+        return simulate_drive(np.random.default_rng(seed)).log
+    return read_log(name)
