@@ -110,6 +110,11 @@ class FastSlamParams:
         a turn), and a filter with few particles needs the wider spread to cover them.
         Victoria Park needs 4: at GTSAM's optimum ten consecutive heading increments
         (poses 3343 to 3352) are each 2.8 sigma off, 9 sigma together.
+    new_landmark_chi2 : float
+        Unknown association: an observation farther than this squared Mahalanobis
+        distance from every landmark starts a new one; between ``gate_chi2`` and this it
+        is ambiguous and skipped (two gates, as in Bailey's EKF-SLAM: fewer duplicates
+        when a loop closes with some drift).
     confirm_evidence : int
         With unknown association, the final map keeps the landmarks whose evidence
         (times seen minus times missed in view) reached this count: a spurious detection
@@ -122,6 +127,7 @@ class FastSlamParams:
     resample_threshold: float = 0.5
     gate_chi2: float = 13.8
     view_margin: float = 0.9
+    new_landmark_chi2: float = 50.0
     confirm_evidence: int = 3
     odometry_noise_scale: float = 1.0
 
@@ -281,19 +287,29 @@ def _associate(
     r: FloatArray,
     used: BoolArray,
     gate: float,
-) -> tuple[IntArray, BoolArray]:
-    """Maximum-likelihood landmark per particle ``(P,)`` and the mask of new ones ``(P,)``."""
+    new_gate: float,
+) -> tuple[IntArray, BoolArray, BoolArray]:
+    """Maximum-likelihood association for each particle.
+
+    Returns the landmark slot ``(P,)``, the mask of particles for which the observation
+    is a new landmark (no landmark within ``new_gate``) and the mask of those for which
+    it is ambiguous (none within ``gate``, one within ``new_gate``: the observation is
+    skipped rather than risk a duplicate).
+    """
     # empty slots hold a placeholder 1 m away, so that no distance is zero
-    mu = np.where((state.active & ~used)[..., None], state.mu, poses[:, None, :2] + 1.0)
+    cand = state.active & ~used
+    mu = np.where(cand[..., None], state.mu, poses[:, None, :2] + 1.0)
     z_pred = predict_range_bearing(poses[:, None, :], mu)
     _, h_m = range_bearing_jacobians(poses[:, None, :], mu)
     q = _matmul(_matmul(h_m, state.sigma), np.swapaxes(h_m, -1, -2)) + r
     q_inv, det = inv2(q)
-    d2 = mahalanobis2(innovation(z, z_pred), q_inv)
-    ok = state.active & ~used & (d2 <= gate)
+    d2 = np.where(cand, mahalanobis2(innovation(z, z_pred), q_inv), np.inf)
+    ok = d2 <= gate
     score = np.where(ok, -0.5 * d2 - 0.5 * np.log(np.where(ok, det, 1.0)), -np.inf)
     j = np.argmax(score, axis=1)
-    return j.astype(np.int64), ~ok.any(axis=1)
+    matched = ok.any(axis=1)
+    new = ~matched & (d2.min(axis=1) > new_gate)
+    return j.astype(np.int64), new, ~matched & ~new
 
 
 def fastslam_step(
@@ -359,7 +375,7 @@ def fastslam_step(
     # pass 1: association, weights, and (2.0) the proposal
     used = np.zeros(state.active.shape, dtype=bool)
     fresh = np.zeros(state.active.shape, dtype=bool)
-    plan: list[tuple[int, IntArray]] = []
+    plan: list[tuple[int, IntArray, BoolArray]] = []
     log_p0 = 0.0
     for k in range(z.shape[0]):
         r = z_cov[k]
@@ -369,8 +385,11 @@ def fastslam_step(
                 continue
             j = np.full(p, slot, dtype=np.int64)
             new = ~state.active[:, slot]
+            skip = np.zeros(p, dtype=bool)
         else:
-            j, new = _associate(state, prop_mean, z[k], r, used, params.gate_chi2)
+            j, new, skip = _associate(
+                state, prop_mean, z[k], r, used, params.gate_chi2, params.new_landmark_chi2
+            )
             if new.any():
                 free = ~state.active
                 if not free.any(axis=1).all():
@@ -383,9 +402,9 @@ def fastslam_step(
                 fresh[ar[new], j[new]] = True
                 log_p0 = -0.5 * params.gate_chi2 - _LOG_2PI - 0.5 * float(np.log(np.linalg.det(r)))
                 state.log_w[new] += log_p0
-        used[ar, j] = True
-        plan.append((k, j))
-        old = ~new
+        used[ar[~skip], j[~skip]] = True
+        plan.append((k, j, skip))
+        old = ~new & ~skip
         if not old.any():
             continue
         idx = ar[old]
@@ -423,7 +442,7 @@ def fastslam_step(
 
     # pass 2: landmark Kalman updates (or initialisation) from the sampled pose
     seen = np.zeros(state.active.shape, dtype=bool)
-    for k, j in plan:
+    for k, j, skip in plan:
         r = z_cov[k]
         new = fresh[ar, j] | (known & ~state.active[ar, j])
         # a new landmark's slot holds no estimate yet: a placeholder 1 m away stands in
@@ -438,11 +457,13 @@ def fastslam_step(
         upd_mu = lm_mu + _matmul(gain, innovation(z[k], z_pred)[..., None])[..., 0]
         upd_sigma = lm_sigma - _matmul(_matmul(gain, q), np.swapaxes(gain, -1, -2))
         upd_sigma = 0.5 * (upd_sigma + np.swapaxes(upd_sigma, -1, -2))
-        state.mu[ar, j] = np.where(new[:, None], init_mu, upd_mu)
-        state.sigma[ar, j] = np.where(new[:, None, None], init_sigma, upd_sigma)
-        state.active[ar, j] = True
-        fresh[ar, j] = False
-        seen[ar, j] = True
+        keep = ar[~skip]
+        js = j[~skip]
+        state.mu[keep, js] = np.where(new[:, None], init_mu, upd_mu)[~skip]
+        state.sigma[keep, js] = np.where(new[:, None, None], init_sigma, upd_sigma)[~skip]
+        state.active[keep, js] = True
+        fresh[keep, js] = False
+        seen[keep, js] = True
 
     state.evidence += seen
     if not known and sensor is not None:
