@@ -193,7 +193,7 @@ def odometry_covariance(
     floor = np.array(
         [noise.floor_sigma_xy_m**2, noise.floor_sigma_xy_m**2, noise.floor_sigma_theta_rad**2]
     )
-    cov += np.diag(floor)
+    cov = 0.5 * (cov + np.swapaxes(cov, -1, -2)) + np.diag(floor)  # exactly symmetric
     return np.asarray(cov, dtype=np.float64)
 
 
