@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 import pytest
@@ -17,7 +18,7 @@ VP = Path(__file__).resolve().parents[1] / "data" / "victoria_park_first1500.txt
 
 
 @pytest.mark.parametrize("version", [1, 2])
-def test_known_association_beats_dead_reckoning(drive: DriveResult, version: int) -> None:
+def test_known_association_beats_dead_reckoning(drive: DriveResult, version: Literal[1, 2]) -> None:
     res = run_fastslam(drive.log, np.random.default_rng(0), params=FastSlamParams(version=version))
     doc = slam_summary(drive.log, res)
     assert doc["odometry_position_rms_m"] > 2.0  # the drive's odometry really drifts
@@ -54,7 +55,9 @@ def test_victoria_park_subset_against_gtsam() -> None:
     log = read_log(VP)
     graph, initial = gtsam.load2D(str(VP))
     graph.add(
-        gtsam.PriorFactorPose2(0, gtsam.Pose2(), gtsam.noiseModel.Diagonal.Sigmas([1e-3, 1e-3, 1e-4]))
+        gtsam.PriorFactorPose2(
+            0, gtsam.Pose2(), gtsam.noiseModel.Diagonal.Sigmas([1e-3, 1e-3, 1e-4])
+        )
     )
     opt = gtsam.LevenbergMarquardtOptimizer(graph, initial, gtsam.LevenbergMarquardtParams())
     best = opt.optimize()

@@ -44,7 +44,8 @@ def test_round_trip_of_a_simulated_log(tmp_path: Path, drive: DriveResult) -> No
     np.testing.assert_array_equal(a.obs_landmark, b.obs_landmark)
     np.testing.assert_allclose(a.obs_z, b.obs_z, rtol=1e-15)
     np.testing.assert_allclose(a.obs_cov, b.obs_cov, rtol=1e-14)
-    assert b.truth_pose is not None and a.truth_pose is not None
+    assert b.truth_pose is not None
+    assert a.truth_pose is not None
     np.testing.assert_array_equal(a.truth_pose, b.truth_pose)
     assert b.sensor_fov_rad == pytest.approx(math.radians(51.0))
 

@@ -14,15 +14,23 @@ VP = Path(__file__).resolve().parents[1] / "data" / "victoria_park_first1500.txt
 
 def test_slam_on_victoria_park_subset(tmp_path: Path) -> None:
     out = tmp_path / "o"
-    assert main(["slam", str(VP), "--out", str(out), "--particles", "50", "--odometry-noise-scale", "4"]) == 0
+    assert (
+        main(
+            ["slam", str(VP), "--out", str(out), "--particles", "50", "--odometry-noise-scale", "4"]
+        )
+        == 0
+    )
     lines = (out / "trajectory.csv").read_text().splitlines()
     assert lines[0] == "pose_id,x,y,theta"
     assert len(lines) == 1 + 929
     assert lines[1] == "0,0.000000,0.000000,0.000000"  # the first pose at the origin
     lm = (out / "landmarks.csv").read_text().splitlines()
-    assert lm[0] == "id,x,y" and len(lm) == 1 + 52
+    assert lm[0] == "id,x,y"
+    assert len(lm) == 1 + 52
     doc = json.loads((out / "summary.json").read_text())
-    assert doc["particles"] == 50 and doc["poses"] == 929 and doc["claims"] == []
+    assert doc["particles"] == 50
+    assert doc["poses"] == 929
+    assert doc["claims"] == []
     assert (out / "slam.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out / "slam.gif").read_bytes()[:6] == b"GIF89a"
 

@@ -68,7 +68,9 @@ def absolute_trajectory_error(estimate: ArrayLike, reference: ArrayLike) -> floa
     e = np.asarray(estimate, dtype=np.float64)
     r = np.asarray(reference, dtype=np.float64)
     if e.ndim != 2 or e.shape[1] not in (2, 3) or r.shape != e.shape:
-        raise InputError(f"estimate and reference must be (N, 2) or (N, 3) alike, got {e.shape}, {r.shape}")
+        raise InputError(
+            f"estimate and reference must be (N, 2) or (N, 3) alike, got {e.shape}, {r.shape}"
+        )
     rot, t = align_rigid_2d(e[:, :2], r[:, :2])
     res = e[:, :2] @ rot.T + t - r[:, :2]
     return float(np.sqrt(np.mean(np.sum(res * res, axis=1))))

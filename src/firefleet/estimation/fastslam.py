@@ -270,7 +270,9 @@ def _matmul(a: FloatArray, b: FloatArray) -> FloatArray:
     return np.asarray(np.matmul(a, b), dtype=np.float64)
 
 
-def _init_landmarks(poses: FloatArray, z: FloatArray, r: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _init_landmarks(
+    poses: FloatArray, z: FloatArray, r: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """Mean ``(P, 2)`` and covariance ``(P, 2, 2)`` of landmarks first seen at ``z``."""
     ang = poses[:, 2] + z[1]
     m = np.stack([poses[:, 0] + z[0] * np.cos(ang), poses[:, 1] + z[0] * np.sin(ang)], axis=-1)
@@ -434,9 +436,9 @@ def fastslam_step(
             state.log_w[idx] += -0.5 * mahalanobis2(nu, q_inv) - 0.5 * np.log(det) - _LOG_2PI
 
     if v2:  # sample the pose from the proposal
-        chol = np.linalg.cholesky(prop_cov + 1e-12 * np.eye(3))
+        chol = np.asarray(np.linalg.cholesky(prop_cov + 1e-12 * np.eye(3)), dtype=np.float64)
         eps = rng.standard_normal((p, 3, 1))
-        poses = prop_mean + _matmul(chol, eps)[..., 0]
+        poses: FloatArray = prop_mean + _matmul(chol, eps)[..., 0]
         poses[:, 2] = wrap_angle(poses[:, 2])
         state.poses = poses
 

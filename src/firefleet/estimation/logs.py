@@ -221,14 +221,14 @@ def parse_log(lines: Iterable[str], *, name: str = "<log>") -> SlamLog:
         if tag not in _FIELDS:
             raise InputError(f"{where}: unknown record {tag!r} (expected one of {sorted(_FIELDS)})")
         if len(words) - 1 != _FIELDS[tag]:
-            raise InputError(
-                f"{where}: {tag} needs {_FIELDS[tag]} fields, got {len(words) - 1}"
-            )
+            raise InputError(f"{where}: {tag} needs {_FIELDS[tag]} fields, got {len(words) - 1}")
         n_int = _INT_FIELDS.get(tag, 0)
         try:
             ints = [int(w) for w in words[1 : 1 + n_int]]
         except ValueError:
-            raise InputError(f"{where}: {tag} ids must be integers, got {words[1 : 1 + n_int]}") from None
+            raise InputError(
+                f"{where}: {tag} ids must be integers, got {words[1 : 1 + n_int]}"
+            ) from None
         try:
             nums = [float(w) for w in words[1 + n_int :]]
         except ValueError:

@@ -40,6 +40,7 @@ __all__ = [
     "MclParams",
     "MclResult",
     "OdometryNoise",
+    "bearing_log_likelihood",
     "compose",
     "effective_sample_size",
     "gaussian_particles",
@@ -49,7 +50,6 @@ __all__ = [
     "predict_range_bearing",
     "range_bearing_jacobians",
     "range_bearing_log_likelihood",
-    "bearing_log_likelihood",
     "relative_pose",
     "run_mcl",
     "sample_odometry",
@@ -284,9 +284,7 @@ def range_bearing_jacobians(
     return h_pose, h_lm
 
 
-def range_bearing_log_likelihood(
-    z: ArrayLike, z_pred: ArrayLike, cov: ArrayLike
-) -> FloatArray:
+def range_bearing_log_likelihood(z: ArrayLike, z_pred: ArrayLike, cov: ArrayLike) -> FloatArray:
     """Gaussian log likelihood of range-bearing observations, bearing error wrapped.
 
     Parameters
@@ -396,7 +394,8 @@ def low_variance_resample(weights: FloatArray, rng: np.random.Generator) -> IntA
     cdf = np.cumsum(weights)
     cdf[-1] = 1.0  # guard against rounding: every pointer falls inside the last interval
     pointers = (rng.random() + np.arange(n)) / n
-    return np.minimum(np.searchsorted(cdf, pointers, side="right"), n - 1).astype(np.int64)
+    idx = np.minimum(np.searchsorted(cdf, pointers, side="right"), n - 1)
+    return np.asarray(idx, dtype=np.int64)
 
 
 def weighted_pose_mean(poses: FloatArray, weights: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -440,9 +439,7 @@ def gaussian_particles(
     return out
 
 
-def uniform_particles(
-    bounds: ArrayLike, n_particles: int, rng: np.random.Generator
-) -> FloatArray:
+def uniform_particles(bounds: ArrayLike, n_particles: int, rng: np.random.Generator) -> FloatArray:
     """Particles spread uniformly over a rectangle and every heading (global localisation).
 
     Parameters
@@ -622,7 +619,7 @@ def run_mcl(
         if ess[k] < prm.resample_threshold * n:
             x = x[low_variance_resample(w, rng)]
             if prm.random_fraction > 0.0 and prm.bounds is not None:
-                n_rand = int(round(prm.random_fraction * n))
+                n_rand = round(prm.random_fraction * n)
                 pick = rng.choice(n, size=n_rand, replace=False)
                 x[pick] = uniform_particles(prm.bounds, n_rand, rng)
             log_w = np.zeros(n)

@@ -98,7 +98,7 @@ def slam_figure_png(log: SlamLog, result: FastSlamResult) -> bytes:
     return buffer.getvalue()
 
 
-def slam_animation_gif(log: SlamLog, result: FastSlamResult, *, fps: float = 8.0) -> bytes:
+def slam_animation_gif(log: SlamLog, result: FastSlamResult, *, fps: int = 8) -> bytes:
     """An animation of the run: the filtered track growing and the map at each snapshot.
 
     Parameters
@@ -106,7 +106,7 @@ def slam_animation_gif(log: SlamLog, result: FastSlamResult, *, fps: float = 8.0
     log : SlamLog
     result : FastSlamResult
         Run with ``n_snapshots > 0``; one frame per snapshot.
-    fps : float
+    fps : int
         Frames per second of the GIF.
 
     Returns

@@ -52,12 +52,12 @@ from firefleet.models.kinematics import RobotGeometry, body_to_wheels, diff_driv
 from firefleet.models.motor import MotorParams, discretise_motor, motor_step
 
 __all__ = [
+    "SIM_LOOP",
     "DriveParams",
     "DriveResult",
     "RangeBearingSensor",
-    "loop_landmarks",
-    "SIM_LOOP",
     "load_or_simulate_log",
+    "loop_landmarks",
     "loop_path",
     "simulate_drive",
 ]
@@ -253,7 +253,7 @@ def loop_landmarks(params: DriveParams, rng: np.random.Generator) -> FloatArray:
     ``landmark_offset_m`` from the path, on alternating sides.
     """
     path = loop_path(params, spacing_m=0.02)
-    step = max(int(round(params.landmark_spacing_m / 0.02)), 1)
+    step = max(round(params.landmark_spacing_m / 0.02), 1)
     idx = np.arange(step // 2, path.shape[0], step)
     tangent = path[(idx + 1) % path.shape[0]] - path[idx - 1]
     tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
@@ -331,9 +331,9 @@ def simulate_drive(
     lms = loop_landmarks(prm, rng) if landmarks is None else np.asarray(landmarks, dtype=float)
     path = loop_path(prm)
     spacing = 0.02
-    look = max(int(round(prm.lookahead_m / spacing)), 1)
-    window = max(int(round(4.0 * prm.speed_m_s * prm.dt_s / spacing)) + 20, 20)
-    n_steps = int(math.ceil(prm.laps * prm.loop_length_m / prm.speed_m_s / prm.dt_s))
+    look = max(round(prm.lookahead_m / spacing), 1)
+    window = max(round(4.0 * prm.speed_m_s * prm.dt_s / spacing) + 20, 20)
+    n_steps = math.ceil(prm.laps * prm.loop_length_m / prm.speed_m_s / prm.dt_s)
     nominal = prm.geometry
     true_geo = RobotGeometry(
         wheel_radius_m=nominal.wheel_radius_m, axle_length_m=nominal.axle_length_m * prm.axle_scale
@@ -347,7 +347,9 @@ def simulate_drive(
     odo = np.zeros((1, 3))
     current = np.zeros((1, 2))
     speed = np.zeros((1, 2))
-    enc = encoder_init(rng.uniform(0.0, count_rad, size=(1, 2)) if cpr else np.zeros((1, 2)), prm.encoder)
+    enc = encoder_init(
+        rng.uniform(0.0, count_rad, size=(1, 2)) if cpr else np.zeros((1, 2)), prm.encoder
+    )
     last_counts = enc.history[-1].copy()
     pid = pid_init(np.zeros((1, 2)))
     measured = np.zeros((1, 2))
