@@ -60,7 +60,7 @@ FloatArray = NDArray[np.float64]
 
 RESULTS_PATH = Path(__file__).resolve().parent / "results.json"
 
-TOPICS = ("path_following", "fuzzy", "formation", "thermal", "stereo")
+TOPICS = ("path_following", "fuzzy", "formation", "thermal", "stereo", "slam")
 """Modules of bench/ run after the motor benchmarks, each exposing ``run(console)``."""
 
 TEAM_SIZES = (1, 100, 10_000)

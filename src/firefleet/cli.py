@@ -11,6 +11,8 @@
     firefleet fis FILE [--out DIR] [--fix NAME=VALUE ...]
     firefleet fis FILE --eval IN.csv --out OUT.csv
     firefleet thermal FRAME... [--out DIR] [--counts CAL] [--hfov-deg DEG] [--fire-width-m W]
+    firefleet slam LOG [--particles P] [--seed N] [--out DIR] [--version {1,2}]
+                   [--association {known,unknown}] [--odometry-noise-scale S] [--no-plots]
 
 Bad input (an unknown scenario, a malformed file, a bad value) is one line per problem
 on stderr and exit status 2, with nothing written. A run whose claims do not all hold
@@ -362,6 +364,93 @@ def _add_thermal_parser(sub: Any) -> None:
 
 
 # ------------------------------------------------------------------ end thermal
+# --- slam (issue 7): FastSLAM on a log ------------------------------------------------
+
+
+def _cmd_slam(args: argparse.Namespace, out: Console, err: Console) -> int:
+    import numpy as np
+
+    from firefleet.estimation.fastslam import (
+        FastSlamParams,
+        landmarks_csv,
+        run_fastslam,
+        slam_summary,
+        trajectory_csv,
+    )
+    from firefleet.estimation.logs import format_log
+    from firefleet.sim.world import SIM_LOOP, load_or_simulate_log
+
+    if args.seed < 0:
+        raise InputError(f"--seed must be >= 0, got {args.seed}")
+    params = FastSlamParams(
+        n_particles=args.particles,
+        version=args.version,
+        association=args.association,
+        odometry_noise_scale=args.odometry_noise_scale,
+    )
+    log = load_or_simulate_log(args.log, seed=args.seed)
+    dest = Path(args.out) if args.out else Path("runs") / f"slam-{Path(args.log).stem}"
+    with _progress_bar(err, f"FastSLAM {args.version}.0 over {log.n_poses} poses") as progress:
+        result = run_fastslam(
+            log,
+            np.random.default_rng(args.seed),
+            params=params,
+            n_snapshots=0 if args.no_plots else 60,
+            progress=progress,
+        )
+    summary = slam_summary(log, result)
+    with staged_dir(dest) as stage:
+        (stage / "trajectory.csv").write_text(trajectory_csv(log, result), encoding="utf-8")
+        (stage / "landmarks.csv").write_text(landmarks_csv(result), encoding="utf-8")
+        (stage / "summary.json").write_text(json_text(summary), encoding="utf-8")
+        if args.log == SIM_LOOP:
+            (stage / "log.txt").write_text(format_log(log), encoding="utf-8")
+        if not args.no_plots:
+            from firefleet.report.slam import slam_animation_gif, slam_figure_png
+
+            (stage / "slam.png").write_bytes(slam_figure_png(log, result))
+            (stage / "slam.gif").write_bytes(slam_animation_gif(log, result))
+    table = Table(title=f"FastSLAM {args.version}.0 on {log.name}")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_column("claim")
+    table.add_column("result")
+    by_name = {c["name"]: c for c in summary["claims"]}
+    for key, value in summary.items():
+        if key == "claims":
+            continue
+        claim = by_name.get(key)
+        shown = f"{value:.6g}" if isinstance(value, float) else str(value)
+        verdict = "" if claim is None else ("[green]passed" if claim["passed"] else "[red]FAILED")
+        table.add_row(key, shown, "" if claim is None else claim["expected"], verdict)
+    out.print(table)
+    out.print(f"wrote {dest}/", markup=False, highlight=False)
+    return EXIT_OK if _all_passed(summary) else EXIT_CLAIM_FAILED
+
+
+def _add_slam_parser(sub: Any) -> None:
+    slam = sub.add_parser(
+        "slam", help="run FastSLAM on a log (Victoria Park / GTSAM text, firefleet's own)"
+    )
+    slam.add_argument(
+        "log", metavar="LOG", help="log file, or 'sim-loop' to simulate the 100 m loop"
+    )
+    slam.add_argument("--particles", type=int, default=100, metavar="P", help="default 100")
+    slam.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (default 0)")
+    slam.add_argument("--out", metavar="DIR", help="output folder (default: runs/slam-LOG)")
+    slam.add_argument("--version", type=int, choices=(1, 2), default=2, help="FastSLAM 1.0 or 2.0")
+    slam.add_argument("--association", choices=("known", "unknown"), default="known")
+    slam.add_argument(
+        "--odometry-noise-scale",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="factor on the log's odometry standard deviations (Victoria Park: 4)",
+    )
+    slam.add_argument("--no-plots", action="store_true", help="skip slam.png and slam.gif")
+
+
+# --- end slam ---------------------------------------------------------------------------
 
 
 def _figure_number(label: str) -> tuple[int, str]:
@@ -497,6 +586,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_stereo_parsers(sub)
     _add_fis_parser(sub)
     _add_thermal_parser(sub)
+    _add_slam_parser(sub)
     return parser
 
 
@@ -509,6 +599,7 @@ _COMMANDS = {
     "capture": _cmd_capture,
     "fis": _cmd_fis,
     "thermal": _cmd_thermal,
+    "slam": _cmd_slam,
 }
 
 

@@ -1,0 +1,399 @@
+"""Benchmark of FastSLAM: Victoria Park against GTSAM, PythonRobotics' FastSLAM 1.0 as a
+peer, and steps per second by particle and landmark count.
+
+``run(console)`` measures, prints rich tables with PASS/FAIL for issue 7's floors, and
+returns every number as a JSON-able dict. Run directly: ``python bench/slam.py``.
+
+1. Victoria Park (the whole 4 km set, 6,969 poses, 3,640 observations, given
+   association): FastSLAM 2.0 with 100 particles, odometry sigmas x 4 (see
+   ``FastSlamParams.odometry_noise_scale``), five seeds; reference: GTSAM's batch optimum
+   (iSAM2 over the poses in order, then Levenberg-Marquardt over all factors, from gtsam's
+   ``load2D`` reading of the same file). Absolute trajectory error after rigid alignment.
+2. Peer: PythonRobotics ``SLAM/FastSLAM1/fast_slam1.py`` imported from the fetched mirror
+   (``/work/.mirror/AtsushiSakai+PythonRobotics``, never copied into this repository) on
+   its own scenario (8 RFID landmarks, its noise, 100 particles, 50 s at 0.1 s). The
+   scenario is generated once with the peer's own ``observation`` function, then both
+   filters run on the same inputs; firefleet's FastSLAM 1.0 gets the peer's motion noise
+   ``R`` (on v and yaw rate) as the odometry covariance and its ``Q`` as observation noise.
+3. Scaling: steps per second (one odometry step and two observations of known landmarks
+   per step) for 100, 1,000 and 10,000 particles with 10 and 100 landmarks, and the
+   tracemalloc peak.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+if __name__ == "__main__":
+    for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_var, "1")
+
+import importlib
+import math
+import subprocess
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from firefleet.estimation.alignment import absolute_trajectory_error
+from firefleet.estimation.fastslam import FastSlamParams, fastslam_init, fastslam_step, run_fastslam
+from firefleet.estimation.logs import SlamLog, read_log
+
+VICTORIA = Path("/work/shared/data/slam/victoria_park.txt")
+MIRROR = Path("/work/.mirror/AtsushiSakai+PythonRobotics/repo")
+SEEDS = (0, 1, 2, 3, 4)
+FLOOR_ATE_M = 5.0
+FLOOR_TIME_S = 60.0
+FLOOR_SPEEDUP = 50.0
+
+
+def verdict(ok: bool) -> str:
+    """PASS/FAIL for rich."""
+    return "[bold green]PASS[/]" if ok else "[bold red]FAIL[/]"
+
+
+def gtsam_optimum(log: SlamLog, path: Path) -> tuple[np.ndarray, float, float]:
+    """GTSAM's batch optimum of the log's poses (T, 2), its final error, and the time."""
+    import gtsam
+
+    graph, _ = gtsam.load2D(str(path))
+    order = {int(p): k for k, p in enumerate(log.pose_ids)}
+    buckets: list[list[Any]] = [[] for _ in range(log.n_poses)]
+    for i in range(graph.size()):
+        f = graph.at(i)
+        buckets[max(order[k] for k in f.keys() if k in order)].append(f)  # noqa: SIM118 (gtsam KeyVector)
+    prior = gtsam.PriorFactorPose2(
+        int(log.pose_ids[0]), gtsam.Pose2(), gtsam.noiseModel.Diagonal.Sigmas([1e-3, 1e-3, 1e-4])
+    )
+    t0 = time.perf_counter()
+    isam = gtsam.ISAM2(gtsam.ISAM2Params())
+    est = gtsam.Values()
+    seen: set[int] = set()
+    for k, pid in enumerate(log.pose_ids):
+        fg = gtsam.NonlinearFactorGraph()
+        vals = gtsam.Values()
+        if k == 0:
+            fg.add(prior)
+            pose = gtsam.Pose2()
+        else:
+            pose = est.atPose2(int(log.pose_ids[k - 1])).compose(gtsam.Pose2(*log.odometry[k - 1]))
+        vals.insert(int(pid), pose)
+        for f in buckets[k]:
+            fg.add(f)
+            for key in f.keys():  # noqa: SIM118 (a gtsam KeyVector, not a dict)
+                if key in order or key in seen:
+                    continue
+                seen.add(key)
+                lid = gtsam.Symbol(key).index()
+                n = np.flatnonzero((log.obs_step == k) & (log.obs_landmark == lid))[0]
+                r, b = log.obs_z[n]
+                vals.insert(key, pose.transformFrom(np.array([r * math.cos(b), r * math.sin(b)])))
+        isam.update(fg, vals)
+        est = isam.calculateEstimate()
+    graph.add(prior)
+    opt = gtsam.LevenbergMarquardtOptimizer(graph, est, gtsam.LevenbergMarquardtParams())
+    best = opt.optimize()
+    seconds = time.perf_counter() - t0
+    ref = np.array([[best.atPose2(int(i)).x(), best.atPose2(int(i)).y()] for i in log.pose_ids])
+    return ref, float(graph.error(best)), seconds
+
+
+def bench_victoria(console: Console) -> dict[str, Any]:
+    """Whole Victoria Park set: ATE against GTSAM and run time, five seeds."""
+    if not VICTORIA.exists():
+        console.print(f"  {VICTORIA} absent: Victoria Park skipped")
+        return {"skipped": True}
+    log = read_log(VICTORIA)
+    console.print("  GTSAM reference (iSAM2 + Levenberg-Marquardt) ...")
+    ref, err, gt_s = gtsam_optimum(log, VICTORIA)
+    rows = []
+    for seed in SEEDS:
+        res = run_fastslam(
+            log,
+            np.random.default_rng(seed),
+            params=FastSlamParams(version=2, odometry_noise_scale=4.0),
+        )
+        rows.append(
+            {
+                "seed": seed,
+                "ate_m": absolute_trajectory_error(res.trajectory[:, :2], ref),
+                "filtered_ate_m": absolute_trajectory_error(res.filtered[:, :2], ref),
+                "run_time_s": res.run_time_s,
+            }
+        )
+    ate_odo = absolute_trajectory_error(log.dead_reckoning()[:, :2], ref)
+    table = Table(title="1. Victoria Park, whole set: FastSLAM 2.0 (100 particles) vs GTSAM")
+    for col in ("seed", "ATE (m)", "filtered ATE (m)", "run time (s)"):
+        table.add_column(col, justify="right")
+    for r in rows:
+        table.add_row(
+            str(r["seed"]),
+            f"{r['ate_m']:.2f}",
+            f"{r['filtered_ate_m']:.2f}",
+            f"{r['run_time_s']:.2f}",
+        )
+    console.print(table)
+    median = float(np.median([r["ate_m"] for r in rows]))
+    worst_time = max(r["run_time_s"] for r in rows)
+    console.print(
+        f"  odometry-only ATE {ate_odo:.1f} m; GTSAM final error {err:.1f}, {gt_s:.1f} s; "
+        f"median FastSLAM ATE {median:.2f} m"
+    )
+    return {
+        "poses": log.n_poses,
+        "observations": log.n_observations,
+        "runs": rows,
+        "median_ate_m": median,
+        "odometry_ate_m": ate_odo,
+        "gtsam_error": err,
+        "gtsam_time_s": gt_s,
+        "max_run_time_s": worst_time,
+    }
+
+
+def _peer_module(tmp: Path) -> Any:
+    """PythonRobotics' fast_slam1 module, extracted from the mirror into ``tmp``."""
+    git_dir = MIRROR
+    for rel in ("SLAM/FastSLAM1/fast_slam1.py", "utils/angle.py", "utils/__init__.py"):
+        out = tmp / rel
+        out.parent.mkdir(parents=True, exist_ok=True)
+        text = subprocess.run(
+            ["git", f"--git-dir={git_dir}", "show", f"HEAD:{rel}"],
+            capture_output=True,
+            check=False,
+            text=True,
+        )
+        out.write_text(text.stdout if text.returncode == 0 else "")
+    sys.path[:0] = [str(tmp), str(tmp / "SLAM/FastSLAM1")]
+    mod: Any = importlib.import_module("fast_slam1")
+    mod.show_animation = False
+    return mod
+
+
+def bench_peer(console: Console) -> dict[str, Any]:
+    """Both FastSLAM 1.0s on the peer's own scenario, same inputs, one run each."""
+    if not MIRROR.exists():
+        console.print(f"  peer mirror {MIRROR} absent: peer comparison skipped")
+        return {"skipped": True}
+    with tempfile.TemporaryDirectory() as tmp:
+        pr = _peer_module(Path(tmp))
+        rfid = np.array(
+            [
+                [10.0, -2.0],
+                [15.0, 10.0],
+                [15.0, 15.0],
+                [10.0, 20.0],
+                [3.0, 15.0],
+                [-5.0, 20.0],
+                [-5.0, 5.0],
+                [-10.0, 15.0],
+            ]
+        )
+        np.random.seed(0)  # noqa: NPY002 (the peer draws from numpy's global generator)
+        x_true = np.zeros((3, 1))
+        x_dr = np.zeros((3, 1))
+        t = 0.0
+        inputs, obs, truth = [], [], []
+        while t <= pr.SIM_TIME:
+            t += pr.DT
+            u = pr.calc_input(t)
+            x_true, z, x_dr, ud = pr.observation(x_true, x_dr, u, rfid)
+            inputs.append(ud.copy())
+            obs.append(z.copy())
+            truth.append(x_true[:, 0].copy())
+        truth_arr = np.array(truth)
+        n = len(inputs)
+        # peer
+        particles = [pr.Particle(rfid.shape[0]) for _ in range(pr.N_PARTICLE)]
+        est_peer = np.empty((n, 3))
+        t0 = time.perf_counter()
+        for k in range(n):
+            particles = pr.fast_slam1(particles, inputs[k], obs[k])
+            est_peer[k] = pr.calc_final_state(particles)[:, 0]
+        peer_s = time.perf_counter() - t0
+        # ours, the same inputs: odometry (v dt, 0, w dt), covariance from the peer's R
+        dt = pr.DT
+        r_cov = np.diag([pr.R[0, 0] * dt * dt, 1e-8, pr.R[1, 1] * dt * dt])
+        prm = FastSlamParams(n_particles=pr.N_PARTICLE, version=1, resample_threshold=1 / 1.5)
+        state = fastslam_init(prm.n_particles, landmark_ids=np.arange(rfid.shape[0]))
+        rng = np.random.default_rng(0)
+        est_ours = np.empty((n, 3))
+        t0 = time.perf_counter()
+        for k in range(n):
+            v, w = inputs[k][:, 0]
+            z = obs[k]
+            zz = np.ascontiguousarray(z[:2].T)
+            fastslam_step(
+                state,
+                np.array([v * dt, 0.0, w * dt]),
+                r_cov,
+                zz,
+                np.tile(pr.Q, (zz.shape[0], 1, 1)),
+                z[2].astype(np.int64),
+                rng,
+                params=prm,
+            )
+            wts = state.weights()
+            est_ours[k, :2] = wts @ state.poses[:, :2]
+        ours_s = time.perf_counter() - t0
+    sys.path[:] = [p for p in sys.path if not p.startswith(tmp)]
+    rms_peer = float(np.sqrt(np.mean(np.sum((est_peer[:, :2] - truth_arr[:, :2]) ** 2, axis=1))))
+    rms_ours = float(np.sqrt(np.mean(np.sum((est_ours[:, :2] - truth_arr[:, :2]) ** 2, axis=1))))
+    table = Table(title="2. PythonRobotics FastSLAM 1.0 scenario (100 particles, 50 s, 501 steps)")
+    for col in ("filter", "position RMS (m)", "time (s)", "ms/step"):
+        table.add_column(col, justify="right")
+    table.add_row(
+        "PythonRobotics fast_slam1", f"{rms_peer:.3f}", f"{peer_s:.2f}", f"{1e3 * peer_s / n:.2f}"
+    )
+    table.add_row(
+        "firefleet FastSLAM 1.0", f"{rms_ours:.3f}", f"{ours_s:.3f}", f"{1e3 * ours_s / n:.3f}"
+    )
+    console.print(table)
+    return {
+        "steps": n,
+        "peer_rms_m": rms_peer,
+        "ours_rms_m": rms_ours,
+        "peer_time_s": peer_s,
+        "ours_time_s": ours_s,
+        "speedup_per_step": peer_s / ours_s,
+    }
+
+
+def bench_scaling(console: Console) -> list[dict[str, Any]]:
+    """Steps per second and tracemalloc peak by particles and landmarks."""
+    rows = []
+    for n_lm in (10, 100):
+        for n_p in (100, 1_000, 10_000):
+            rng = np.random.default_rng(0)
+            lms = rng.uniform(-20, 20, (n_lm, 2))
+            state = fastslam_init(n_p, landmark_ids=np.arange(n_lm))
+            prm = FastSlamParams(n_particles=n_p, version=1)
+            cov = np.diag([1e-4, 1e-4, 1e-4])
+            zc = np.tile(np.diag([0.01, 1e-4]), (2, 1, 1))
+
+            def step(
+                k: int,
+                state: Any = state,
+                lms: np.ndarray = lms,
+                n_lm: int = n_lm,
+                prm: FastSlamParams = prm,
+                rng: np.random.Generator = rng,
+                cov: np.ndarray = cov,
+                zc: np.ndarray = zc,
+            ) -> None:
+                ids = np.array([k % n_lm, (k * 7 + 3) % n_lm])
+                p = state.poses[0]
+                d = lms[ids] - p[:2]
+                z = np.stack([np.hypot(d[:, 0], d[:, 1]), np.arctan2(d[:, 1], d[:, 0]) - p[2]], 1)
+                fastslam_step(state, np.array([0.1, 0.0, 0.01]), cov, z, zc, ids, rng, params=prm)
+
+            for k in range(2 * n_lm):  # every landmark initialised before timing
+                step(k)
+            steps = 200 if n_p < 10_000 else 30
+            t0 = time.perf_counter()
+            for k in range(steps):
+                step(k)
+            sec = time.perf_counter() - t0
+            tracemalloc.start()
+            step(0)
+            _, peak = tracemalloc.get_traced_memory()
+            tracemalloc.stop()
+            rows.append(
+                {
+                    "particles": n_p,
+                    "landmarks": n_lm,
+                    "steps_per_s": steps / sec,
+                    "step_peak_mb": peak / 1e6,
+                    "state_mb": (
+                        state.mu.nbytes
+                        + state.sigma.nbytes
+                        + state.active.nbytes
+                        + state.evidence.nbytes
+                        + state.poses.nbytes
+                    )
+                    / 1e6,
+                }
+            )
+    table = Table(title="3. FastSLAM 1.0 steps per second (2 observations per step)")
+    for col in ("particles", "landmarks", "steps/s", "state (MB)", "step peak (MB)"):
+        table.add_column(col, justify="right")
+    for r in rows:
+        table.add_row(
+            f"{r['particles']:,}",
+            str(r["landmarks"]),
+            f"{r['steps_per_s']:,.0f}",
+            f"{r['state_mb']:.1f}",
+            f"{r['step_peak_mb']:.1f}",
+        )
+    console.print(table)
+    return rows
+
+
+def run(console: Console) -> dict[str, Any]:
+    """Every measurement of issue 7, with its floors."""
+    console.print("[bold]slam 1. Victoria Park[/]")
+    vp = bench_victoria(console)
+    console.print("[bold]slam 2. PythonRobotics peer[/]")
+    peer = bench_peer(console)
+    console.print("[bold]slam 3. scaling[/]")
+    scaling = bench_scaling(console)
+    floors = []
+    if not vp.get("skipped"):
+        floors.append(
+            (
+                "Victoria Park median ATE vs GTSAM",
+                f"<= {FLOOR_ATE_M} m",
+                f"{vp['median_ate_m']:.2f} m",
+                vp["median_ate_m"] <= FLOOR_ATE_M,
+            )
+        )
+        floors.append(
+            (
+                "Victoria Park whole set, 100 particles, one core",
+                f"< {FLOOR_TIME_S} s",
+                f"{vp['max_run_time_s']:.2f} s",
+                vp["max_run_time_s"] < FLOOR_TIME_S,
+            )
+        )
+    if not peer.get("skipped"):
+        floors.append(
+            (
+                "error vs PythonRobotics (one run)",
+                "no worse",
+                f"{peer['ours_rms_m']:.3f} vs {peer['peer_rms_m']:.3f} m",
+                peer["ours_rms_m"] <= peer["peer_rms_m"],
+            )
+        )
+        floors.append(
+            (
+                "speed per step vs PythonRobotics",
+                f">= {FLOOR_SPEEDUP:g}x",
+                f"{peer['speedup_per_step']:.0f}x",
+                peer["speedup_per_step"] >= FLOOR_SPEEDUP,
+            )
+        )
+    table = Table(title="slam floors")
+    for col in ("floor", "required", "measured", "verdict"):
+        table.add_column(col)
+    for name, req, meas, ok in floors:
+        table.add_row(name, req, meas, verdict(ok))
+    console.print(table)
+    return {
+        "victoria_park": vp,
+        "peer": peer,
+        "scaling": scaling,
+        "floors": [
+            {"name": f[0], "required": f[1], "measured": f[2], "pass": f[3]} for f in floors
+        ],
+    }
+
+
+if __name__ == "__main__":
+    run(Console())
