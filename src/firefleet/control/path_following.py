@@ -17,8 +17,12 @@ Two Takagi-Sugeno systems, shipped as MATLAB ``.fis`` files in ``control/data/``
       1.0 m/s. With Table 1's alpha rules (all VeryVerySlow) averaged in, v grows
       about linearly with D_rp, ``v ~ 0.01 + D_rp / 2`` m/s up to 0.8 m, so robots
       whose points are farther apart (longer paths) go faster (2.6.2.6).
-    * x_err: Negative (zmf) and Positive (smf) crossing over -5 cm .. 5 cm; Negative
-      fires rule 11 alone: v = omega = 0, the robot waits (2.6.2.4).
+    * x_err: Negative (zmf) and Positive (smf) crossing over -5 cm .. 25 cm; Negative
+      fires rule 11 alone: v = omega = 0, the robot waits (2.6.2.4). The crossing is
+      wide enough that a robot starting off its path, just behind its point, sets off
+      smoothly instead of lurching and stopping each time the point moves on. At the
+      built-in scenarios' speeds (0.2-0.36 m/s) a robot tracking its path lags its point
+      by 0.4-0.7 m, where x_err is all Positive.
     * alpha: mNeg, Small, mPos peak at -20, 0, 20 deg, BigNegative and BigPositive
       from 60 deg out; consequents -180, -60, 0, 60, 180 deg/s, so omega is about
       1.5 alpha per second for small errors and dominated by alpha (Figure 17).
