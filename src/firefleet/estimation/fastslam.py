@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from firefleet.errors import InputError, check_fields
+from firefleet.estimation.fastslam_kernel import update_known_v1, update_known_v2
 from firefleet.estimation.logs import SlamLog
 from firefleet.estimation.particle_filter import (
     ProgressCallback,
@@ -358,6 +359,9 @@ def fastslam_step(
     ar = np.arange(p)
     known = params.association == "known"
     v2 = params.version == 2 and delta is not None
+    if known:
+        _step_known(state, delta, delta_cov, z, z_cov, z_landmark, rng, v2=v2)
+        return _resample(state, params, rng)
 
     # motion: a sample (1.0) or the proposal's prior mean and covariance (2.0)
     prop_mean = state.poses
@@ -471,6 +475,48 @@ def fastslam_step(
     if not known and sensor is not None:
         _negative_evidence(state, seen, sensor, params.view_margin)
 
+    return _resample(state, params, rng)
+
+
+def _step_known(
+    state: FastSlamState,
+    delta: FloatArray | None,
+    delta_cov: FloatArray | None,
+    z: FloatArray,
+    z_cov: FloatArray,
+    z_landmark: IntArray,
+    rng: np.random.Generator,
+    *,
+    v2: bool,
+) -> None:
+    """Motion and observations with given association, by the compiled kernels."""
+    slots = np.searchsorted(state.slot_ids, z_landmark).astype(np.int64)
+    ok = slots < state.slot_ids.size
+    ok[ok] = state.slot_ids[slots[ok]] == z_landmark[ok]
+    slots[~ok] = -1
+    zz = np.ascontiguousarray(z, dtype=np.float64)
+    zc = np.ascontiguousarray(z_cov, dtype=np.float64)
+    if v2 and delta is not None and delta_cov is not None:
+        eps = rng.standard_normal((state.n_particles, 3))
+        update_known_v2(
+            state.poses, state.log_w, state.mu, state.sigma, state.active, state.evidence,
+            slots, zz, zc, np.ascontiguousarray(delta, dtype=np.float64),
+            np.ascontiguousarray(delta_cov, dtype=np.float64), eps,
+        )  # fmt: skip
+        return
+    if delta is not None and delta_cov is not None:
+        state.poses = sample_odometry(state.poses, delta, delta_cov, rng)
+    update_known_v1(
+        state.poses, state.log_w, state.mu, state.sigma, state.active, state.evidence, slots,
+        zz, zc,
+    )  # fmt: skip
+
+
+def _resample(
+    state: FastSlamState, params: FastSlamParams, rng: np.random.Generator
+) -> tuple[float, IntArray | None]:
+    """Low-variance resampling when the effective sample size is below the threshold."""
+    p = state.n_particles
     w = state.weights()
     ess = effective_sample_size(w)
     if ess >= params.resample_threshold * p:
