@@ -378,6 +378,7 @@ def fastslam_step(
             state.poses = sample_odometry(state.poses, delta, delta_cov, rng)
             prop_mean = state.poses
 
+    # unknown association (NumPy over particles)
     # pass 1: association, weights, and (2.0) the proposal
     used = np.zeros(state.active.shape, dtype=bool)
     fresh = np.zeros(state.active.shape, dtype=bool)
@@ -385,29 +386,21 @@ def fastslam_step(
     log_p0 = 0.0
     for k in range(z.shape[0]):
         r = z_cov[k]
-        if known:
-            slot = int(np.searchsorted(state.slot_ids, z_landmark[k]))
-            if slot >= state.slot_ids.size or state.slot_ids[slot] != z_landmark[k]:
-                continue
-            j = np.full(p, slot, dtype=np.int64)
-            new = ~state.active[:, slot]
-            skip = np.zeros(p, dtype=bool)
-        else:
-            j, new, skip = _associate(
-                state, prop_mean, z[k], r, used, params.gate_chi2, params.new_landmark_chi2
-            )
-            if new.any():
+        j, new, skip = _associate(
+            state, prop_mean, z[k], r, used, params.gate_chi2, params.new_landmark_chi2
+        )
+        if new.any():
+            free = ~state.active
+            if not free.any(axis=1).all():
+                _grow(state)
+                used = np.concatenate([used, np.zeros_like(used)], axis=1)
+                fresh = np.concatenate([fresh, np.zeros_like(fresh)], axis=1)
                 free = ~state.active
-                if not free.any(axis=1).all():
-                    _grow(state)
-                    used = np.concatenate([used, np.zeros_like(used)], axis=1)
-                    fresh = np.concatenate([fresh, np.zeros_like(fresh)], axis=1)
-                    free = ~state.active
-                j = np.where(new, np.argmax(free, axis=1), j)
-                state.active[ar[new], j[new]] = True
-                fresh[ar[new], j[new]] = True
-                log_p0 = -0.5 * params.gate_chi2 - _LOG_2PI - 0.5 * float(np.log(np.linalg.det(r)))
-                state.log_w[new] += log_p0
+            j = np.where(new, np.argmax(free, axis=1), j)
+            state.active[ar[new], j[new]] = True
+            fresh[ar[new], j[new]] = True
+            log_p0 = -0.5 * params.gate_chi2 - _LOG_2PI - 0.5 * float(np.log(np.linalg.det(r)))
+            state.log_w[new] += log_p0
         used[ar[~skip], j[~skip]] = True
         plan.append((k, j, skip))
         old = ~new & ~skip
@@ -450,7 +443,7 @@ def fastslam_step(
     seen = np.zeros(state.active.shape, dtype=bool)
     for k, j, skip in plan:
         r = z_cov[k]
-        new = fresh[ar, j] | (known & ~state.active[ar, j])
+        new = fresh[ar, j]
         # a new landmark's slot holds no estimate yet: a placeholder 1 m away stands in
         lm_mu = np.where(new[:, None], state.poses[:, :2] + 1.0, state.mu[ar, j])
         lm_sigma = state.sigma[ar, j]
@@ -472,7 +465,7 @@ def fastslam_step(
         seen[keep, js] = True
 
     state.evidence += seen
-    if not known and sensor is not None:
+    if sensor is not None:
         _negative_evidence(state, seen, sensor, params.view_margin)
 
     return _resample(state, params, rng)
