@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from firefleet.errors import InputError, check_fields
+from firefleet.estimation.fastslam_kernel import update_known_v1, update_known_v2
 from firefleet.estimation.logs import SlamLog
 from firefleet.estimation.particle_filter import (
     ProgressCallback,
@@ -358,6 +359,9 @@ def fastslam_step(
     ar = np.arange(p)
     known = params.association == "known"
     v2 = params.version == 2 and delta is not None
+    if known:
+        _step_known(state, delta, delta_cov, z, z_cov, z_landmark, rng, v2=v2)
+        return _resample(state, params, rng)
 
     # motion: a sample (1.0) or the proposal's prior mean and covariance (2.0)
     prop_mean = state.poses
@@ -374,6 +378,7 @@ def fastslam_step(
             state.poses = sample_odometry(state.poses, delta, delta_cov, rng)
             prop_mean = state.poses
 
+    # unknown association (NumPy over particles)
     # pass 1: association, weights, and (2.0) the proposal
     used = np.zeros(state.active.shape, dtype=bool)
     fresh = np.zeros(state.active.shape, dtype=bool)
@@ -381,29 +386,21 @@ def fastslam_step(
     log_p0 = 0.0
     for k in range(z.shape[0]):
         r = z_cov[k]
-        if known:
-            slot = int(np.searchsorted(state.slot_ids, z_landmark[k]))
-            if slot >= state.slot_ids.size or state.slot_ids[slot] != z_landmark[k]:
-                continue
-            j = np.full(p, slot, dtype=np.int64)
-            new = ~state.active[:, slot]
-            skip = np.zeros(p, dtype=bool)
-        else:
-            j, new, skip = _associate(
-                state, prop_mean, z[k], r, used, params.gate_chi2, params.new_landmark_chi2
-            )
-            if new.any():
+        j, new, skip = _associate(
+            state, prop_mean, z[k], r, used, params.gate_chi2, params.new_landmark_chi2
+        )
+        if new.any():
+            free = ~state.active
+            if not free.any(axis=1).all():
+                _grow(state)
+                used = np.concatenate([used, np.zeros_like(used)], axis=1)
+                fresh = np.concatenate([fresh, np.zeros_like(fresh)], axis=1)
                 free = ~state.active
-                if not free.any(axis=1).all():
-                    _grow(state)
-                    used = np.concatenate([used, np.zeros_like(used)], axis=1)
-                    fresh = np.concatenate([fresh, np.zeros_like(fresh)], axis=1)
-                    free = ~state.active
-                j = np.where(new, np.argmax(free, axis=1), j)
-                state.active[ar[new], j[new]] = True
-                fresh[ar[new], j[new]] = True
-                log_p0 = -0.5 * params.gate_chi2 - _LOG_2PI - 0.5 * float(np.log(np.linalg.det(r)))
-                state.log_w[new] += log_p0
+            j = np.where(new, np.argmax(free, axis=1), j)
+            state.active[ar[new], j[new]] = True
+            fresh[ar[new], j[new]] = True
+            log_p0 = -0.5 * params.gate_chi2 - _LOG_2PI - 0.5 * float(np.log(np.linalg.det(r)))
+            state.log_w[new] += log_p0
         used[ar[~skip], j[~skip]] = True
         plan.append((k, j, skip))
         old = ~new & ~skip
@@ -446,7 +443,7 @@ def fastslam_step(
     seen = np.zeros(state.active.shape, dtype=bool)
     for k, j, skip in plan:
         r = z_cov[k]
-        new = fresh[ar, j] | (known & ~state.active[ar, j])
+        new = fresh[ar, j]
         # a new landmark's slot holds no estimate yet: a placeholder 1 m away stands in
         lm_mu = np.where(new[:, None], state.poses[:, :2] + 1.0, state.mu[ar, j])
         lm_sigma = state.sigma[ar, j]
@@ -468,9 +465,51 @@ def fastslam_step(
         seen[keep, js] = True
 
     state.evidence += seen
-    if not known and sensor is not None:
+    if sensor is not None:
         _negative_evidence(state, seen, sensor, params.view_margin)
 
+    return _resample(state, params, rng)
+
+
+def _step_known(
+    state: FastSlamState,
+    delta: FloatArray | None,
+    delta_cov: FloatArray | None,
+    z: FloatArray,
+    z_cov: FloatArray,
+    z_landmark: IntArray,
+    rng: np.random.Generator,
+    *,
+    v2: bool,
+) -> None:
+    """Motion and observations with given association, by the compiled kernels."""
+    slots = np.searchsorted(state.slot_ids, z_landmark).astype(np.int64)
+    ok = slots < state.slot_ids.size
+    ok[ok] = state.slot_ids[slots[ok]] == z_landmark[ok]
+    slots[~ok] = -1
+    zz = np.ascontiguousarray(z, dtype=np.float64)
+    zc = np.ascontiguousarray(z_cov, dtype=np.float64)
+    if v2 and delta is not None and delta_cov is not None:
+        eps = rng.standard_normal((state.n_particles, 3))
+        update_known_v2(
+            state.poses, state.log_w, state.mu, state.sigma, state.active, state.evidence,
+            slots, zz, zc, np.ascontiguousarray(delta, dtype=np.float64),
+            np.ascontiguousarray(delta_cov, dtype=np.float64), eps,
+        )  # fmt: skip
+        return
+    if delta is not None and delta_cov is not None:
+        state.poses = sample_odometry(state.poses, delta, delta_cov, rng)
+    update_known_v1(
+        state.poses, state.log_w, state.mu, state.sigma, state.active, state.evidence, slots,
+        zz, zc,
+    )  # fmt: skip
+
+
+def _resample(
+    state: FastSlamState, params: FastSlamParams, rng: np.random.Generator
+) -> tuple[float, IntArray | None]:
+    """Low-variance resampling when the effective sample size is below the threshold."""
+    p = state.n_particles
     w = state.weights()
     ess = effective_sample_size(w)
     if ess >= params.resample_threshold * p:
