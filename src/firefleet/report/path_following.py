@@ -12,7 +12,7 @@ import numpy as np
 from mpl_toolkits.mplot3d import Axes3D
 from numpy.typing import NDArray
 
-from firefleet.control.fuzzy import evaluate
+from firefleet.control.fuzzy import SugenoSystem, evaluate, membership
 from firefleet.control.path_following import PathFollowingController
 from firefleet.scenarios.schema import PathFollowing
 from firefleet.sim.result import SimResult
@@ -109,20 +109,14 @@ def _surface(
     ax.tick_params(labelsize=7)
 
 
-def _memberships(ax: matplotlib.axes.Axes, system: object, index: int, title: str) -> None:
-    from firefleet.control.fuzzy_kernel import compile_system, membership_one
-
-    var = system.inputs[index]  # type: ignore[attr-defined]
+def _memberships(ax: matplotlib.axes.Axes, system: SugenoSystem, index: int, title: str) -> None:
+    var = system.inputs[index]
     lo, hi = var.range
     xs = np.linspace(lo, hi, 601)
-    tables = compile_system(system)
-    first = int(np.nonzero(tables.mf_input == index)[0][0])
-    for m, mf in enumerate(var.mfs):
-        code = tables.mf_kind[first + m]
-        ax.plot(
-            xs, [membership_one(code, tables.mf_params, first + m, x) for x in xs], label=mf.name
-        )
+    for mf in var.mfs:
+        ax.plot(xs, membership(mf.kind, mf.params, xs), label=mf.name)
     ax.set_title(title, fontsize=9)
+    ax.set_ylabel("membership", fontsize=8)
     ax.set_ylim(-0.02, 1.05)
     ax.legend(fontsize=6, loc="center right")
     ax.grid(alpha=0.3)
@@ -166,6 +160,7 @@ def controller_png(controller: PathFollowingController) -> bytes:
     ax.plot(ys, evaluate(lam, ys[:, None])[:, 0], color="tab:purple")
     ax.set_title("Fig. 21: lambda(y_err) [deg]", fontsize=9)
     ax.set_xlabel("y_err [m]", fontsize=8)
+    ax.set_ylabel("lambda [deg]", fontsize=8)
     ax.grid(alpha=0.3)
     ax.tick_params(labelsize=7)
     xe, d2 = np.meshgrid(np.linspace(-0.3, 0.3, 41), np.linspace(0, 3, 41))
@@ -188,10 +183,10 @@ def controller_png(controller: PathFollowingController) -> bytes:
         ("x_err [m]", "alpha [deg]", "omega [deg/s]"),
         "Fig. 23: omega(x_err, alpha), D_rp = 0.5 m",
     )
-    _memberships(fig.add_subplot(3, 3, 9), main, 1, "x_err [m] (zoomed: -3..3 m range)")
-    fig.axes[-1].set_xlim(-0.2, 0.2)
+    _memberships(fig.add_subplot(3, 3, 9), main, 1, "x_err [m] (range -3..3 m, zoomed)")
+    fig.axes[-1].set_xlim(-0.2, 0.4)
     fig.suptitle("The fuzzy path-following controller (control/data/*.fis)")
-    fig.tight_layout()
+    fig.tight_layout(w_pad=4.0)
     return _png(fig)
 
 
