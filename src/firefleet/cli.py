@@ -12,7 +12,8 @@
     firefleet fis FILE --eval IN.csv --out OUT.csv
     firefleet thermal FRAME... [--out DIR] [--counts CAL] [--hfov-deg DEG] [--fire-width-m W]
     firefleet slam LOG [--particles P] [--seed N] [--out DIR] [--version {1,2}]
-                   [--association {known,unknown}] [--odometry-noise-scale S] [--no-plots]
+                   [--association {known,unknown}] [--odometry-noise-scale S]
+                   [--heading-drift-sigma RAD_PER_M] [--turn-scale-sigma S] [--no-plots]
 
 Bad input (an unknown scenario, a malformed file, a bad value) is one line per problem
 on stderr and exit status 2, with nothing written. A run whose claims do not all hold
@@ -387,6 +388,8 @@ def _cmd_slam(args: argparse.Namespace, out: Console, err: Console) -> int:
         version=args.version,
         association=args.association,
         odometry_noise_scale=args.odometry_noise_scale,
+        heading_drift_sigma=args.heading_drift_sigma,
+        turn_scale_sigma=args.turn_scale_sigma,
     )
     log = load_or_simulate_log(args.log, seed=args.seed)
     dest = Path(args.out) if args.out else Path("runs") / f"slam-{Path(args.log).stem}"
@@ -445,7 +448,21 @@ def _add_slam_parser(sub: Any) -> None:
         type=float,
         default=1.0,
         metavar="S",
-        help="factor on the log's odometry standard deviations (Victoria Park: 4)",
+        help="factor on the log's odometry standard deviations (Victoria Park: 2)",
+    )
+    slam.add_argument(
+        "--heading-drift-sigma",
+        type=float,
+        default=0.0,
+        metavar="RAD_PER_M",
+        help="estimate a heading drift per metre with this prior sigma (Victoria Park: 0.003)",
+    )
+    slam.add_argument(
+        "--turn-scale-sigma",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="estimate a turn scale error with this prior sigma (Victoria Park: 0.05)",
     )
     slam.add_argument("--no-plots", action="store_true", help="skip slam.png and slam.gif")
 

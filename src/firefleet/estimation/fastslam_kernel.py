@@ -199,7 +199,9 @@ def update_known_v2(
     ----------
     poses : (P, 3) the previous poses, replaced by the sampled ones
     log_w, mu, sigma, active, evidence, slots, z, z_cov : as :func:`update_known_v1`
-    delta : (3,) odometry dx, dy [m], dtheta [rad]; delta_cov : (3, 3) its covariance
+    delta : (P, 3) odometry dx, dy [m], dtheta [rad] of each particle (the same measured
+        motion, corrected by each particle's odometry calibration); delta_cov : (3, 3) its
+        covariance
     eps : (P, 3) standard normal draws for the pose sample
     """
     cov = np.empty((3, 3))
@@ -209,9 +211,9 @@ def update_known_v2(
     for i in range(poses.shape[0]):
         th = poses[i, 2]
         c, s = math.cos(th), math.sin(th)
-        mean[0] = poses[i, 0] + c * delta[0] - s * delta[1]
-        mean[1] = poses[i, 1] + s * delta[0] + c * delta[1]
-        mean[2] = _wrap(th + delta[2])
+        mean[0] = poses[i, 0] + c * delta[i, 0] - s * delta[i, 1]
+        mean[1] = poses[i, 1] + s * delta[i, 0] + c * delta[i, 1]
+        mean[2] = _wrap(th + delta[i, 2])
         # cov = J D J^T with J = rot(theta) (+) 1
         for a in range(3):
             tmp[0, a] = c * delta_cov[0, a] - s * delta_cov[1, a]
