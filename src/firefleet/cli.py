@@ -419,9 +419,13 @@ def _cmd_slam(args: argparse.Namespace, out: Console, err: Console) -> int:
     table.add_column("claim")
     table.add_column("result")
     by_name = {c["name"]: c for c in summary["claims"]}
+    rows: list[tuple[str, Any]] = []
     for key, value in summary.items():
-        if key == "claims":
-            continue
+        if isinstance(value, dict):  # odometry_calibration: one row per estimate
+            rows += list(value.items())
+        elif key != "claims":
+            rows.append((key, value))
+    for key, value in rows:
         claim = by_name.get(key)
         shown = f"{value:.6g}" if isinstance(value, float) else str(value)
         verdict = "" if claim is None else ("[green]passed" if claim["passed"] else "[red]FAILED")
