@@ -39,14 +39,20 @@ import time
 import tracemalloc
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from rich.console import Console
 from rich.table import Table
 
 from firefleet.estimation.alignment import absolute_trajectory_error
-from firefleet.estimation.fastslam import FastSlamParams, fastslam_init, fastslam_step, run_fastslam
+from firefleet.estimation.fastslam import (
+    FastSlamParams,
+    fastslam_init,
+    fastslam_step,
+    run_fastslam,
+    slam_summary,
+)
 from firefleet.estimation.logs import SlamLog, read_log
 
 VICTORIA = Path("/work/shared/data/slam/victoria_park.txt")
@@ -374,6 +380,55 @@ def bench_scaling(console: Console) -> list[dict[str, Any]]:
     return rows
 
 
+def bench_simulation(console: Console) -> list[dict[str, Any]]:
+    """The simulated 100 m loop's claims over 4 drives x 3 filter seeds, per filter."""
+    from firefleet.sim.world import simulate_drive
+
+    logs = {d: simulate_drive(np.random.default_rng(d)).log for d in (1, 2, 3, 4)}
+    rows: list[dict[str, Any]] = []
+    versions: tuple[Literal[1, 2], ...] = (1, 2)
+    associations: tuple[Literal["known", "unknown"], ...] = ("known", "unknown")
+    for version in versions:
+        for association in associations:
+            prm = FastSlamParams(version=version, association=association)
+            runs = []
+            for drive, log in logs.items():
+                for seed in (0, 1, 2):
+                    doc = slam_summary(
+                        log, run_fastslam(log, np.random.default_rng(seed), params=prm)
+                    )
+                    runs.append(
+                        {
+                            "drive": drive,
+                            "seed": seed,
+                            "position_rms_m": doc["position_rms_m"],
+                            "landmark_rms_m": doc["landmark_rms_m"],
+                            "odometry_position_rms_m": doc["odometry_position_rms_m"],
+                            "duplicate_landmarks": doc["duplicate_landmarks"],
+                            "all_claims": all(c["passed"] for c in doc["claims"]),
+                        }
+                    )
+            rows.append({"version": version, "association": association, "runs": runs})
+    table = Table(title="4. Simulated 100 m loop, 100 particles: 4 drives x 3 seeds")
+    for col in ("filter", "position RMS (m)", "landmark RMS (m)", "duplicates", "all claims"):
+        table.add_column(col, justify="right", no_wrap=True)
+    for r in rows:
+        pos = [x["position_rms_m"] for x in r["runs"]]
+        lm = [x["landmark_rms_m"] for x in r["runs"]]
+        dup = sum(x["duplicate_landmarks"] > 0 for x in r["runs"])
+        ok = sum(x["all_claims"] for x in r["runs"])
+        table.add_row(
+            f"{r['version']}.0 {r['association']}",
+            f"{np.median(pos):.2f} ({max(pos):.2f})",
+            f"{np.median(lm):.2f} ({max(lm):.2f})",
+            f"{dup} of {len(r['runs'])}" if r["association"] == "unknown" else "-",
+            f"{ok}/{len(r['runs'])}",
+        )
+    table.caption = "median (worst); dead reckoning: 3.7-5.2 m"
+    console.print(table)
+    return rows
+
+
 def run(console: Console) -> dict[str, Any]:
     """Every measurement of issue 7, with its floors."""
     console.print("[bold]slam 1. Victoria Park[/]")
@@ -382,6 +437,8 @@ def run(console: Console) -> dict[str, Any]:
     peer = bench_peer(console)
     console.print("[bold]slam 3. scaling[/]")
     scaling = bench_scaling(console)
+    console.print("[bold]slam 4. simulated loop[/]")
+    simulation = bench_simulation(console)
     floors = []
     if not vp.get("skipped"):
         floors.append(
@@ -427,6 +484,7 @@ def run(console: Console) -> dict[str, Any]:
         "victoria_park": vp,
         "peer": peer,
         "scaling": scaling,
+        "simulation": simulation,
         "floors": [
             {"name": f[0], "required": f[1], "measured": f[2], "pass": f[3]} for f in floors
         ],
