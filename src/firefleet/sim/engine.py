@@ -8,14 +8,18 @@ Each tick, for N robots at once (batch-first arrays, no per-robot Python objects
       -> models.kinematics poses                                        (N, 3)
       -> models.encoder    counts and measured speeds                   (N, 2)
 
+(the wheel stack of :mod:`firefleet.sim.drive`, shared with the formation runner and the
+SLAM drive of :mod:`firefleet.sim.world`).
+
 Randomness (the encoders' unknown initial phase) comes from one
 ``numpy.random.Generator`` seeded with the scenario's ``seed``: same seed, same arrays,
 bit for bit.
 
 Two backends run the same arithmetic in the same order. ``"array"`` steps the whole team
-with NumPy (the models' public step functions). ``"scalar"`` steps each wheel with Python
-floats: for a handful of robots NumPy's per-call overhead (about 1 us, some 100 calls a
-step) dominates, and plain floats run the 10 s single-robot loop about 15 times faster.
+with NumPy (:mod:`firefleet.sim.drive`, on the models' public step functions).
+``"scalar"`` steps each wheel with Python floats: for a handful of robots NumPy's
+per-call overhead (about 1 us, some 100 calls a step) dominates, and plain floats run
+the 10 s single-robot loop about 15 times faster.
 ``"auto"`` takes the scalar one up to ``SCALAR_MAX_ROBOTS`` robots. The two agree to
 rounding (tests/sim/test_engine.py), so a result does not depend on the team size.
 """
@@ -30,11 +34,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from firefleet.control.pid import pid_init, pid_step
 from firefleet.errors import InputError
-from firefleet.models.encoder import encoder_init, encoder_step
-from firefleet.models.kinematics import diff_drive_step
-from firefleet.models.motor import discretise_motor, motor_step
+from firefleet.models.motor import discretise_motor
 from firefleet.scenarios.schema import (
     Formation,
     PathFollowing,
@@ -43,6 +44,7 @@ from firefleet.scenarios.schema import (
     WheelSpeedStep,
 )
 from firefleet.sim.cooperative import simulate_path_following
+from firefleet.sim.drive import discretise_drive, drive_init, drive_step, speed_control
 from firefleet.sim.formation import simulate_formation
 from firefleet.sim.result import SimResult
 
@@ -121,18 +123,12 @@ def _simulate_motors(
     if backend == "scalar" or (backend == "auto" and n <= SCALAR_MAX_ROBOTS):
         return _simulate_scalar(scenario, phase, rec_steps, progress)
 
-    motor = discretise_motor(scenario.motor, dt)
-    pid_params = scenario.speed_pid
+    stack = discretise_drive(scenario.robot, scenario.motor, scenario.speed_pid, enc_params, dt)
     cmd = scenario.command
     assert isinstance(cmd, VoltageStep | WheelSpeedStep)  # the dispatch in simulate()
     open_loop = isinstance(cmd, VoltageStep)
     step_value = cmd.voltage_v if isinstance(cmd, VoltageStep) else cmd.speed_rad_s
-    pose = scenario.initial_poses
-    current = np.zeros((n, 2))
-    speed = np.zeros((n, 2))
-    encoder = encoder_init(phase, enc_params)
-    measured = np.zeros((n, 2))
-    pid = pid_init(measured)
+    drive = drive_init(scenario.initial_poses, phase, stack)
 
     n_rec = rec_steps.size
     t_rec = np.asarray(rec_steps * dt, dtype=np.float64)
@@ -155,21 +151,19 @@ def _simulate_motors(
             voltage = np.full((n, 2), level)
         else:
             ref = np.full((n, 2), level)
-            pid, voltage = pid_step(pid, ref, measured, pid_params, dt)
+            drive, voltage = speed_control(drive, ref, stack)
         if row < n_rec and rec_steps[row] == k:
-            pose_rec[row] = pose
-            rec["speed"][row] = speed
-            rec["measured"][row] = measured
+            pose_rec[row] = drive.pose
+            rec["speed"][row] = drive.speed_rad_s
+            rec["measured"][row] = drive.measured_rad_s
             rec["ref"][row] = ref
-            rec["current"][row] = current
+            rec["current"][row] = drive.current_a
             rec["voltage"][row] = voltage
             rec["load"][row] = load
             row += 1
         if k == n_steps:
             break
-        current, speed, dphi = motor_step(current, speed, voltage, load, motor)
-        pose = diff_drive_step(pose, dphi, scenario.robot)
-        encoder, _, measured = encoder_step(encoder, dphi, enc_params, dt)
+        drive = drive_step(drive, voltage, stack, load_torque_n_m=load)
         if progress is not None and (k + 1) % report_every == 0:
             progress(k + 1, n_steps)
     if progress is not None:
@@ -197,7 +191,8 @@ def _simulate_scalar(
     """The ``"scalar"`` backend: :func:`simulate` with Python floats, wheel by wheel.
 
     Mirrors, operation for operation, ``pid_step``, ``motor_step``, ``diff_drive_step``
-    and ``encoder_step`` as the array backend calls them.
+    and ``encoder_step`` as the array backend calls them (through
+    :func:`firefleet.sim.drive.speed_control` and :func:`firefleet.sim.drive.drive_step`).
     """
     assert isinstance(scenario.command, VoltageStep | WheelSpeedStep)
     dt = scenario.dt_s

@@ -9,8 +9,8 @@ Each tick, for the whole team at once::
     diff-drive robots:  look-ahead point p = (x, y) + l (cos th, sin th)
         u = dc/dt + f / (B + k_d)      (eq. 5 at its terminal velocity), |u| <= v_max
         v = u . (cos th, sin th),  omega = u . (-sin th, cos th) / l
-        -> models.kinematics.body_to_wheels -> control.pid -> models.motor
-        -> models.kinematics.diff_drive_step, models.encoder (measured speeds)
+        -> models.kinematics.body_to_wheels -> sim.drive (the wheel stack: control.pid
+        -> models.motor -> models.kinematics.diff_drive_step, models.encoder)
 
 The feedforward makes the formation's dynamics in the leader's frame those of a fixed
 leader (the damping acts on the velocity relative to the leader), so the formation
@@ -34,13 +34,17 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from firefleet.control.formation import formation_force
-from firefleet.control.pid import pid_init, pid_step
 from firefleet.errors import InputError
-from firefleet.models.encoder import encoder_init, encoder_step
-from firefleet.models.kinematics import body_to_wheels, diff_drive_step
+from firefleet.models.kinematics import body_to_wheels
 from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
-from firefleet.models.motor import discretise_motor, motor_step
 from firefleet.scenarios.schema import Formation, LeaderPath, Scenario
+from firefleet.sim.drive import (
+    DriveState,
+    discretise_drive,
+    drive_init,
+    drive_step,
+    speed_control,
+)
 from firefleet.sim.result import SimResult
 
 __all__ = [
@@ -256,15 +260,13 @@ def simulate_formation(
         mass_kg=cmd.mass_kg, damping_n_s_m=cmd.damping_n_s_m, kd_n_s_m=cmd.kd_n_s_m
     )
     state = np.concatenate([pose[:, :2], np.zeros((n, 2))], axis=1)
-    # the diff-drive stack (built only for diff-drive robots)
-    motor = discretise_motor(scenario.motor, dt)
+    # the diff-drive wheel stack (its state only for diff-drive robots)
     enc = scenario.encoder
-    count_rad = 2.0 * np.pi / enc.counts_per_rev if enc.counts_per_rev else 0.0
-    encoder = encoder_init(rng.uniform(0.0, count_rad, size=(n, 2)), enc) if diff_drive else None
-    current = np.zeros((n, 2))
-    speed = np.zeros((n, 2))
-    measured = np.zeros((n, 2))
-    pid = pid_init(measured)
+    stack = discretise_drive(scenario.robot, scenario.motor, scenario.speed_pid, enc, dt)
+    drive: DriveState | None = None
+    if diff_drive:
+        count_rad = 2.0 * np.pi / enc.counts_per_rev if enc.counts_per_rev else 0.0
+        drive = drive_init(pose, rng.uniform(0.0, count_rad, size=(n, 2)), stack)
     w_max = cmd.max_speed_m_s / scenario.robot.wheel_radius_m
     zero_load = np.zeros((n, 2))
 
@@ -294,7 +296,8 @@ def simulate_formation(
             peak = np.abs(ref).max(axis=1)
             ref *= np.minimum(1.0, w_max / np.maximum(peak, 1e-300))[:, None]
             ref[~active] = 0.0
-            pid, voltage = pid_step(pid, ref, measured, scenario.speed_pid, dt)
+            assert drive is not None
+            drive, voltage = speed_control(drive, ref, stack)
         else:
             force[active] += damping * leader_v[k] + cmd.mass_kg * leader_a[k]
         if row < n_rec and rec_steps[row] == k:
@@ -302,11 +305,12 @@ def simulate_formation(
             rec_point[row] = point
             rec_active[row] = active
             if diff_drive:
+                assert drive is not None
                 for key, arr in (
-                    ("speed", speed),
-                    ("measured", measured),
+                    ("speed", drive.speed_rad_s),
+                    ("measured", drive.measured_rad_s),
                     ("ref", ref),
-                    ("current", current),
+                    ("current", drive.current_a),
                     ("voltage", voltage),
                     ("load", zero_load),
                 ):
@@ -315,10 +319,9 @@ def simulate_formation(
         if k == n_steps:
             break
         if diff_drive:
-            assert encoder is not None
-            current, speed, dphi = motor_step(current, speed, voltage, zero_load, motor)
-            pose = diff_drive_step(pose, dphi, scenario.robot)
-            encoder, _, measured = encoder_step(encoder, dphi, enc, dt)
+            assert drive is not None
+            drive = drive_step(drive, voltage, stack, load_torque_n_m=zero_load)
+            pose = drive.pose
         else:
             new = mass_damper_step(state, force, dt, md)
             new[~active] = np.concatenate(

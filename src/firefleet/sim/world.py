@@ -3,9 +3,9 @@
 One robot of the foundation's stack drives a closed loop (a rounded rectangle, 100 m by
 default) among heat-source landmarks. Every control period (10 ms):
 
-``steering law (pure pursuit) -> models.kinematics.body_to_wheels -> control.pid.pid_step
--> models.motor.motor_step -> models.encoder.encoder_step -> models.kinematics.
-diff_drive_step``.
+``steering law (pure pursuit) -> models.kinematics.body_to_wheels -> sim.drive`` (the
+wheel stack: ``control.pid.pid_step -> models.motor.motor_step -> models.encoder.
+encoder_step -> models.kinematics.diff_drive_step``, and the dead reckoning).
 
 The true robot is not the one its odometry believes in: its wheels' effective radii
 differ slightly from the nominal one and from each other, its axle is slightly longer,
@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from firefleet.control.pid import PidParams, pid_init, pid_step
+from firefleet.control.pid import PidParams
 from firefleet.errors import InputError, check_fields
 from firefleet.estimation.logs import SlamLog, read_log
 from firefleet.estimation.particle_filter import (
@@ -47,9 +47,10 @@ from firefleet.estimation.particle_filter import (
     predict_range_bearing,
     relative_pose,
 )
-from firefleet.models.encoder import EncoderParams, encoder_init, encoder_step
-from firefleet.models.kinematics import RobotGeometry, body_to_wheels, diff_drive_step, wrap_angle
-from firefleet.models.motor import MotorParams, discretise_motor, motor_step
+from firefleet.models.encoder import EncoderParams
+from firefleet.models.kinematics import RobotGeometry, body_to_wheels, wrap_angle
+from firefleet.models.motor import MotorParams
+from firefleet.sim.drive import discretise_drive, drive_init, drive_step, speed_control
 
 __all__ = [
     "SIM_LOOP",
@@ -335,44 +336,36 @@ def simulate_drive(
     window = max(round(4.0 * prm.speed_m_s * prm.dt_s / spacing) + 20, 20)
     n_steps = math.ceil(prm.laps * prm.loop_length_m / prm.speed_m_s / prm.dt_s)
     nominal = prm.geometry
-    true_geo = RobotGeometry(
-        wheel_radius_m=nominal.wheel_radius_m, axle_length_m=nominal.axle_length_m * prm.axle_scale
+    # the true robot: its wheels' radii, its axle and its slip, as DriveParams says
+    stack = discretise_drive(
+        nominal,
+        prm.motor,
+        prm.pid,
+        prm.encoder,
+        prm.dt_s,
+        wheel_radius_scale=prm.wheel_radius_scale,
+        axle_scale=prm.axle_scale,
+        slip_variance_m=prm.slip_variance_m,
     )
-    scale = np.array(prm.wheel_radius_scale)
-    motor = discretise_motor(prm.motor, prm.dt_s)
     cpr = prm.encoder.counts_per_rev
-    count_rad = 2.0 * math.pi / cpr if cpr else 1.0
-
-    pose = np.zeros((1, 3))
-    odo = np.zeros((1, 3))
-    current = np.zeros((1, 2))
-    speed = np.zeros((1, 2))
-    enc = encoder_init(
-        rng.uniform(0.0, count_rad, size=(1, 2)) if cpr else np.zeros((1, 2)), prm.encoder
-    )
-    last_counts = enc.history[-1].copy()
-    pid = pid_init(np.zeros((1, 2)))
-    measured = np.zeros((1, 2))
+    phase = rng.uniform(0.0, stack.count_angle_rad, size=(1, 2)) if cpr else np.zeros((1, 2))
+    drive = drive_init(np.zeros((1, 3)), phase, stack, odometry=True)
+    assert drive.odometry is not None
     near = 0
     frames_t: list[float] = [0.0]
-    frames_truth: list[FloatArray] = [pose[0].copy()]
-    frames_odo: list[FloatArray] = [odo[0].copy()]
+    frames_truth: list[FloatArray] = [drive.pose[0].copy()]
+    frames_odo: list[FloatArray] = [drive.odometry[0].copy()]
     for step in range(1, n_steps + 1):
-        curvature, near = _pure_pursuit(pose[0], path, near, look, window)
+        curvature, near = _pure_pursuit(drive.pose[0], path, near, look, window)
         v = prm.speed_m_s
         ref = body_to_wheels(np.array([v]), np.array([v * curvature]), nominal)
-        pid, voltage = pid_step(pid, ref, measured, prm.pid, prm.dt_s)
-        current, speed, dphi = motor_step(current, speed, voltage, 0.0, motor)
-        enc, counts, measured = encoder_step(enc, dphi, prm.encoder, prm.dt_s)
-        travel = np.abs(dphi) * nominal.wheel_radius_m * scale
-        slip = rng.standard_normal((1, 2)) * np.sqrt(prm.slip_variance_m * travel)
-        pose = diff_drive_step(pose, dphi * scale + slip / nominal.wheel_radius_m, true_geo)
-        odo = diff_drive_step(odo, (counts - last_counts) * count_rad, nominal)
-        last_counts = counts
+        drive, voltage = speed_control(drive, ref, stack)
+        drive = drive_step(drive, voltage, stack, rng=rng)  # draws the wheels' slip
         if step % sensor.frame_steps == 0:
             frames_t.append(step * prm.dt_s)
-            frames_truth.append(pose[0].copy())
-            frames_odo.append(odo[0].copy())
+            assert drive.odometry is not None  # drive_init(..., odometry=True)
+            frames_truth.append(drive.pose[0].copy())
+            frames_odo.append(drive.odometry[0].copy())
         if progress is not None and step % 500 == 0:
             progress(step, n_steps)
     truth = np.array(frames_truth)
