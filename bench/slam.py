@@ -53,7 +53,7 @@ from firefleet.estimation.fastslam import (
     run_fastslam,
     slam_summary,
 )
-from firefleet.estimation.logs import SlamLog, read_log
+from firefleet.estimation.logs import SlamLog, gtsam_text, read_log
 
 VICTORIA = Path("/work/shared/data/slam/victoria_park.txt")
 MIRROR = Path("/work/.mirror/AtsushiSakai+PythonRobotics/repo")
@@ -380,11 +380,30 @@ def bench_scaling(console: Console) -> list[dict[str, Any]]:
     return rows
 
 
+def sim_optimum_rms(log: SlamLog) -> float:
+    """Position RMS against the truth of GTSAM's batch optimum of a simulated log."""
+    import gtsam
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "log.txt"
+        path.write_text(gtsam_text(log))
+        graph, initial = gtsam.load2D(str(path), noiseFormat=gtsam.NoiseFormat.NoiseFormatCOV)
+    graph.add(
+        gtsam.PriorFactorPose2(0, gtsam.Pose2(), gtsam.noiseModel.Diagonal.Sigmas([1e-4] * 3))
+    )
+    best = gtsam.LevenbergMarquardtOptimizer(graph, initial, gtsam.LevenbergMarquardtParams())
+    est = best.optimize()
+    xy = np.array([[est.atPose2(int(i)).x(), est.atPose2(int(i)).y()] for i in log.pose_ids])
+    assert log.truth_pose is not None
+    return float(np.sqrt(np.mean(np.sum((xy - log.truth_pose[:, :2]) ** 2, axis=1))))
+
+
 def bench_simulation(console: Console) -> list[dict[str, Any]]:
     """The simulated 100 m loop's claims over 4 drives x 3 filter seeds, per filter."""
     from firefleet.sim.world import simulate_drive
 
     logs = {d: simulate_drive(np.random.default_rng(d)).log for d in (1, 2, 3, 4)}
+    optimum = {d: sim_optimum_rms(log) for d, log in logs.items()}
     rows: list[dict[str, Any]] = []
     versions: tuple[Literal[1, 2], ...] = (1, 2)
     associations: tuple[Literal["known", "unknown"], ...] = ("known", "unknown")
@@ -426,7 +445,11 @@ def bench_simulation(console: Console) -> list[dict[str, Any]]:
         )
     table.caption = "median (worst); dead reckoning: 3.7-5.2 m"
     console.print(table)
-    return rows
+    console.print(
+        "  GTSAM's batch optimum of the same logs, position RMS: "
+        + ", ".join(f"drive {d} {v:.3f} m" for d, v in optimum.items())
+    )
+    return [{"gtsam_optimum_position_rms_m": optimum}, *rows]
 
 
 def run(console: Console) -> dict[str, Any]:

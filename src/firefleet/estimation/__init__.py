@@ -13,7 +13,7 @@ from firefleet.estimation.fastslam import (
     fastslam_step,
     run_fastslam,
 )
-from firefleet.estimation.logs import SlamLog, format_log, read_log
+from firefleet.estimation.logs import SlamLog, format_log, gtsam_text, read_log
 from firefleet.estimation.particle_filter import MclParams, MclResult, OdometryNoise, run_mcl
 
 __all__ = [
@@ -28,6 +28,7 @@ __all__ = [
     "fastslam_init",
     "fastslam_step",
     "format_log",
+    "gtsam_text",
     "read_log",
     "run_fastslam",
     "run_mcl",

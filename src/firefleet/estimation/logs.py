@@ -20,7 +20,7 @@ comment. The reader accepts the union of the two:
     given association skips it, one with unknown association uses it.
 
 firefleet's simulated logs (:func:`firefleet.sim.world.simulate_drive` writes them) add
-lines that GTSAM's reader ignores:
+lines of their own:
 
 ``FIREFLEET-SLAM-LOG 1``
     The format and its version, on the first line.
@@ -33,6 +33,12 @@ lines that GTSAM's reader ignores:
     Ground-truth position of landmark ``l`` [m].
 
 Observations are stored internally as (range [m], bearing [rad]).
+
+GTSAM's ``load2D`` cannot read firefleet's own files: it stops at their first line, and
+an unknown landmark ``-1`` is not a valid key. :func:`gtsam_text` writes the part it
+reads (the odometry chain and the observations of known landmarks); load it with
+``gtsam.load2D(path, noiseFormat=gtsam.NoiseFormat.NoiseFormatCOV)``, since the
+odometry's covariances are full and ``load2D``'s default only recognises diagonal ones.
 """
 
 from __future__ import annotations
@@ -49,7 +55,7 @@ from numpy.typing import NDArray
 
 from firefleet.errors import InputError
 
-__all__ = ["FORMAT_TAG", "SlamLog", "format_log", "read_log"]
+__all__ = ["FORMAT_TAG", "SlamLog", "format_log", "gtsam_text", "read_log"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -309,6 +315,30 @@ def parse_log(lines: Iterable[str], *, name: str = "<log>") -> SlamLog:
         truth_landmark_ids=lm_ids,
         truth_landmarks=lm_xy,
     )
+
+
+def gtsam_text(log: SlamLog) -> str:
+    """The part of ``log`` that GTSAM's ``load2D`` reads: ODOMETRY and BR lines.
+
+    Observations without a landmark id (``-1``) are left out. The odometry's full
+    covariance is written as ``c11 c12 c13 c22 c23 c33`` (``NoiseFormatCOV``).
+    """
+    g = ".17g"
+    starts = np.searchsorted(log.obs_step, np.arange(log.n_poses + 1))
+    lines = []
+    for k, pid in enumerate(log.pose_ids):
+        for n in range(starts[k], starts[k + 1]):
+            if log.obs_landmark[n] < 0:
+                continue
+            r, b = log.obs_z[n]
+            sr, sb = np.sqrt(log.obs_cov[n, 0, 0]), np.sqrt(log.obs_cov[n, 1, 1])
+            lines.append(f"BR {pid} {log.obs_landmark[n]} {b:{g}} {r:{g}} {sb:{g}} {sr:{g}}")
+        if k + 1 < log.n_poses:
+            c = log.odometry_cov[k]
+            vals = (*log.odometry[k], c[0, 0], c[0, 1], c[0, 2], c[1, 1], c[1, 2], c[2, 2])
+            odo = " ".join(f"{v:{g}}" for v in vals)
+            lines.append(f"ODOMETRY {pid} {log.pose_ids[k + 1]} {odo}")
+    return "\n".join(lines) + "\n"
 
 
 def format_log(log: SlamLog) -> str:
