@@ -44,9 +44,8 @@ odometry's covariances are full and ``load2D``'s default only recognises diagona
 from __future__ import annotations
 
 import gzip
-import io
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -317,28 +316,41 @@ def parse_log(lines: Iterable[str], *, name: str = "<log>") -> SlamLog:
     )
 
 
+_G = ".17g"  # 17 significant digits: a float written and read back is the same float
+
+
+def _chain_lines(log: SlamLog, *, firefleet: bool) -> Iterator[str]:
+    """Per pose: its TRUTH_POSE (firefleet's own format), BR lines, then the ODOMETRY line.
+
+    Without ``firefleet`` (GTSAM's subset) the truth and the observations of unknown
+    landmarks (``-1``) are left out.
+    """
+    g = _G
+    starts = np.searchsorted(log.obs_step, np.arange(log.n_poses + 1))
+    for k, pid in enumerate(log.pose_ids):
+        if firefleet and log.truth_pose is not None and log.truth_time_s is not None:
+            x, y, th = log.truth_pose[k]
+            yield f"TRUTH_POSE {pid} {log.truth_time_s[k]:{g}} {x:{g}} {y:{g}} {th:{g}}"
+        for n in range(starts[k], starts[k + 1]):
+            if not firefleet and log.obs_landmark[n] < 0:
+                continue
+            r, b = log.obs_z[n]
+            sr, sb = np.sqrt(log.obs_cov[n, 0, 0]), np.sqrt(log.obs_cov[n, 1, 1])
+            yield f"BR {pid} {log.obs_landmark[n]} {b:{g}} {r:{g}} {sb:{g}} {sr:{g}}"
+        if k + 1 < log.n_poses:
+            c = log.odometry_cov[k]
+            vals = (*log.odometry[k], c[0, 0], c[0, 1], c[0, 2], c[1, 1], c[1, 2], c[2, 2])
+            odo = " ".join(f"{v:{g}}" for v in vals)
+            yield f"ODOMETRY {pid} {log.pose_ids[k + 1]} {odo}"
+
+
 def gtsam_text(log: SlamLog) -> str:
     """The part of ``log`` that GTSAM's ``load2D`` reads: ODOMETRY and BR lines.
 
     Observations without a landmark id (``-1``) are left out. The odometry's full
     covariance is written as ``c11 c12 c13 c22 c23 c33`` (``NoiseFormatCOV``).
     """
-    g = ".17g"
-    starts = np.searchsorted(log.obs_step, np.arange(log.n_poses + 1))
-    lines = []
-    for k, pid in enumerate(log.pose_ids):
-        for n in range(starts[k], starts[k + 1]):
-            if log.obs_landmark[n] < 0:
-                continue
-            r, b = log.obs_z[n]
-            sr, sb = np.sqrt(log.obs_cov[n, 0, 0]), np.sqrt(log.obs_cov[n, 1, 1])
-            lines.append(f"BR {pid} {log.obs_landmark[n]} {b:{g}} {r:{g}} {sb:{g}} {sr:{g}}")
-        if k + 1 < log.n_poses:
-            c = log.odometry_cov[k]
-            vals = (*log.odometry[k], c[0, 0], c[0, 1], c[0, 2], c[1, 1], c[1, 2], c[2, 2])
-            odo = " ".join(f"{v:{g}}" for v in vals)
-            lines.append(f"ODOMETRY {pid} {log.pose_ids[k + 1]} {odo}")
-    return "\n".join(lines) + "\n"
+    return "\n".join(_chain_lines(log, firefleet=False)) + "\n"
 
 
 def format_log(log: SlamLog) -> str:
@@ -348,28 +360,15 @@ def format_log(log: SlamLog) -> str:
     Observations become ``BR`` lines with diagonal noise (the off-diagonal term of a
     non-diagonal observation covariance is dropped).
     """
-    out = io.StringIO()
-    out.write(f"{FORMAT_TAG} {FORMAT_VERSION}\n")
-    out.write(f"# {log.name}: {log.n_poses} poses, {log.n_observations} observations\n")
-    g = ".17g"
+    g = _G
+    lines = [
+        f"{FORMAT_TAG} {FORMAT_VERSION}",
+        f"# {log.name}: {log.n_poses} poses, {log.n_observations} observations",
+    ]
     if log.sensor_fov_rad is not None and log.sensor_max_range_m is not None:
-        out.write(f"SENSOR {log.sensor_fov_rad:{g}} {log.sensor_max_range_m:{g}}\n")
+        lines.append(f"SENSOR {log.sensor_fov_rad:{g}} {log.sensor_max_range_m:{g}}")
     if log.truth_landmark_ids is not None and log.truth_landmarks is not None:
         for lid, (x, y) in zip(log.truth_landmark_ids, log.truth_landmarks, strict=True):
-            out.write(f"TRUTH_LANDMARK {lid} {x:{g}} {y:{g}}\n")
-    starts = np.searchsorted(log.obs_step, np.arange(log.n_poses + 1))
-    for k, pid in enumerate(log.pose_ids):
-        if log.truth_pose is not None and log.truth_time_s is not None:
-            x, y, th = log.truth_pose[k]
-            out.write(f"TRUTH_POSE {pid} {log.truth_time_s[k]:{g}} {x:{g}} {y:{g}} {th:{g}}\n")
-        for n in range(starts[k], starts[k + 1]):
-            r, b = log.obs_z[n]
-            sr, sb = np.sqrt(log.obs_cov[n, 0, 0]), np.sqrt(log.obs_cov[n, 1, 1])
-            out.write(f"BR {pid} {log.obs_landmark[n]} {b:{g}} {r:{g}} {sb:{g}} {sr:{g}}\n")
-        if k + 1 < log.n_poses:
-            c = log.odometry_cov[k]
-            vals = (*log.odometry[k], c[0, 0], c[0, 1], c[0, 2], c[1, 1], c[1, 2], c[2, 2])
-            out.write(
-                f"ODOMETRY {pid} {log.pose_ids[k + 1]} " + " ".join(f"{v:{g}}" for v in vals) + "\n"
-            )
-    return out.getvalue()
+            lines.append(f"TRUTH_LANDMARK {lid} {x:{g}} {y:{g}}")
+    lines.extend(_chain_lines(log, firefleet=True))
+    return "\n".join(lines) + "\n"
