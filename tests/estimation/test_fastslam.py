@@ -127,6 +127,29 @@ def test_unknown_association_leaves_no_duplicates(drive: DriveResult) -> None:
     assert doc["landmarks"] == doc["true_landmarks_seen"]
 
 
+@pytest.mark.parametrize(("lateral_m", "landmarks"), [(0.3, 1), (2.0, 2)])
+def test_second_detection_beside_a_matched_landmark_is_not_a_new_one(
+    lateral_m: float, landmarks: int
+) -> None:
+    # one landmark 5 m ahead, well known; a frame sees it, and a second blob lateral_m
+    # beside it: 0.3 m is clutter or a double detection (squared Mahalanobis distance
+    # about 47 from the landmark, under the new-landmark gate of 200), 2 m is a new one
+    n_p = 20
+    st = fastslam_init(n_p)
+    st.mu[:, 0] = [5.0, 0.0]
+    st.sigma[:, 0] = np.eye(2) * 1e-4
+    st.active[:, 0] = True
+    st.evidence[:, 0] = 5
+    z = np.array([[5.0, 0.0], [math.hypot(5.0, lateral_m), math.atan2(lateral_m, 5.0)]])
+    z_cov = np.tile(np.diag([0.1**2, math.radians(0.5) ** 2]), (2, 1, 1))
+    prm = FastSlamParams(n_particles=n_p, association="unknown")
+    fastslam_step(
+        st, None, None, z, z_cov, np.array([-1, -1]), np.random.default_rng(0), params=prm
+    )
+    assert np.all(st.active.sum(axis=1) == landmarks)
+    np.testing.assert_allclose(st.mu[:, 0], [[5.0, 0.0]] * n_p, atol=1e-9)  # matched, unmoved
+
+
 def test_same_seed_same_run(drive: DriveResult) -> None:
     prm = FastSlamParams(n_particles=30, version=2, association="unknown")
     a = run_fastslam(drive.log, np.random.default_rng(7), params=prm)

@@ -135,8 +135,13 @@ class FastSlamParams:
     new_landmark_chi2 : float
         Unknown association: an observation farther than this squared Mahalanobis
         distance from every landmark starts a new one; between ``gate_chi2`` and this it
-        is ambiguous and skipped (two gates, as in Bailey's EKF-SLAM: fewer duplicates
-        when a loop closes with some drift).
+        is ambiguous and skipped (two gates, as in Bailey's EKF-SLAM). 200 (about 14
+        sigma): a landmark seen again after a loop is off by the drift gathered since it
+        was last seen, which no particle's landmark covariance holds. On the simulated
+        loop (4 drives x 3 seeds, 100 particles) 50 left duplicates at the loop's closure
+        in 1 of 12 runs of FastSLAM 2.0 and 2 of 12 of 1.0; 200 leaves none. Two heat
+        sources closer than this (about 1 m apart at 5 m with the simulated sensor) are
+        mapped as one.
     confirm_evidence : int
         With unknown association, the final map keeps the landmarks whose evidence
         (times seen minus times missed in view) reached this count: a spurious detection
@@ -149,7 +154,7 @@ class FastSlamParams:
     resample_threshold: float = 0.5
     gate_chi2: float = 13.8
     view_margin: float = 0.9
-    new_landmark_chi2: float = 50.0
+    new_landmark_chi2: float = 200.0
     confirm_evidence: int = 3
     odometry_noise_scale: float = 1.0
     heading_drift_sigma: float = 0.0
@@ -344,29 +349,36 @@ def _associate(
     z: FloatArray,
     r: FloatArray,
     used: BoolArray,
+    fresh: BoolArray,
     gate: float,
     new_gate: float,
 ) -> tuple[IntArray, BoolArray, BoolArray]:
     """Maximum-likelihood association for each particle.
 
     Returns the landmark slot ``(P,)``, the mask of particles for which the observation
-    is a new landmark (no landmark within ``new_gate``) and the mask of those for which
-    it is ambiguous (none within ``gate``, one within ``new_gate``: the observation is
-    skipped rather than risk a duplicate).
+    is a new landmark and the mask of those for which it is ambiguous, skipped rather
+    than risk a duplicate. An observation matches the most likely landmark within
+    ``gate`` not yet matched in this frame (a landmark gives one detection per frame).
+    It is new when no landmark at all, matched in this frame or not, lies within
+    ``new_gate``: a second detection next to a landmark already matched is clutter or a
+    double detection (a spurious heat blob beside a fire), not a landmark of its own.
+    ``fresh`` marks the slots opened earlier in this frame, which hold no estimate yet.
     """
+    active = state.active & ~fresh
+    cand = active & ~used
     # empty slots hold a placeholder 1 m away, so that no distance is zero
-    cand = state.active & ~used
-    mu = np.where(cand[..., None], state.mu, poses[:, None, :2] + 1.0)
+    mu = np.where(active[..., None], state.mu, poses[:, None, :2] + 1.0)
     z_pred = predict_range_bearing(poses[:, None, :], mu)
     _, h_m = range_bearing_jacobians(poses[:, None, :], mu)
     q = _sandwich2(h_m, state.sigma) + r
     q_inv, det = inv2(q)
-    d2 = np.where(cand, mahalanobis2(innovation(z, z_pred), q_inv), np.inf)
+    m2 = mahalanobis2(innovation(z, z_pred), q_inv)
+    d2 = np.where(cand, m2, np.inf)
     ok = d2 <= gate
     score = np.where(ok, -0.5 * d2 - 0.5 * np.log(np.where(ok, det, 1.0)), -np.inf)
     j = np.argmax(score, axis=1)
     matched = ok.any(axis=1)
-    new = ~matched & (d2.min(axis=1) > new_gate)
+    new = ~matched & (np.where(active, m2, np.inf).min(axis=1) > new_gate)
     return j.astype(np.int64), new, ~matched & ~new
 
 
@@ -443,7 +455,7 @@ def fastslam_step(
     for k in range(z.shape[0]):
         r = z_cov[k]
         j, new, skip = _associate(
-            state, prop_mean, z[k], r, used, params.gate_chi2, params.new_landmark_chi2
+            state, prop_mean, z[k], r, used, fresh, params.gate_chi2, params.new_landmark_chi2
         )
         if new.any():
             free = ~state.active
