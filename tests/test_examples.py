@@ -24,3 +24,21 @@ def test_readme_example_is_the_shipped_file() -> None:
     readme = (EXAMPLES.parent / "README.md").read_text()
     code = (EXAMPLES / "motor_pid.py").read_text().split('"""', 2)[2].strip()
     assert code in readme
+
+
+def test_slam_example(capsys: pytest.CaptureFixture[str]) -> None:
+    runpy.run_path(str(EXAMPLES / "slam_loop.py"), run_name="__main__")
+    out = capsys.readouterr().out
+    pos, odo = (
+        float(x) for x in re.findall(r"position RMS ([\d.]+) m \(odometry alone ([\d.]+)", out)[0]
+    )
+    lm = float(re.findall(r"landmark RMS ([\d.]+) m", out)[0])
+    assert pos <= min(0.5, odo / 2)  # issue 7's bounds for the 100 m loop
+    assert lm <= 0.5
+    assert "duplicates 0" in out
+
+
+def test_readme_slam_example_is_the_shipped_file() -> None:
+    readme = (EXAMPLES.parent / "README.md").read_text()
+    code = (EXAMPLES / "slam_loop.py").read_text().split('"""', 2)[2].strip()
+    assert code in readme

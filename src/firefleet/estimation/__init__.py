@@ -12,6 +12,7 @@ from firefleet.estimation.fastslam import (
     fastslam_init,
     fastslam_step,
     run_fastslam,
+    slam_summary,
 )
 from firefleet.estimation.logs import SlamLog, format_log, gtsam_text, read_log
 from firefleet.estimation.particle_filter import MclParams, MclResult, OdometryNoise, run_mcl
@@ -32,4 +33,5 @@ __all__ = [
     "read_log",
     "run_fastslam",
     "run_mcl",
+    "slam_summary",
 ]
