@@ -46,6 +46,7 @@ __all__ = [
     "discretise_drive",
     "drive_init",
     "drive_step",
+    "encoder_phase",
     "speed_control",
 ]
 
@@ -190,6 +191,26 @@ class DriveState:
     pid: PidState
     encoder: EncoderState
     odometry: FloatArray | None = None
+
+
+def encoder_phase(encoder: EncoderParams, n_robots: int, rng: np.random.Generator) -> FloatArray:
+    """Each wheel's unknown angle from its encoder's zero, uniform within one count.
+
+    Parameters
+    ----------
+    encoder : EncoderParams
+    n_robots : int
+    rng : numpy.random.Generator
+        Gives (n_robots, 2) uniform draws, also for an ideal encoder (all phases 0), so
+        that the random stream does not depend on the encoder.
+
+    Returns
+    -------
+    ndarray, shape (n_robots, 2)
+        Phases [rad] in [0, 2 pi / counts_per_rev).
+    """
+    cpr = encoder.counts_per_rev
+    return rng.uniform(0.0, 2.0 * math.pi / cpr if cpr else 0.0, size=(n_robots, 2))
 
 
 def drive_init(

@@ -44,7 +44,13 @@ from firefleet.scenarios.schema import (
     WheelSpeedStep,
 )
 from firefleet.sim.cooperative import simulate_path_following
-from firefleet.sim.drive import discretise_drive, drive_init, drive_step, speed_control
+from firefleet.sim.drive import (
+    discretise_drive,
+    drive_init,
+    drive_step,
+    encoder_phase,
+    speed_control,
+)
 from firefleet.sim.formation import simulate_formation
 from firefleet.sim.result import SimResult
 
@@ -118,8 +124,7 @@ def _simulate_motors(
     n_steps = scenario.n_steps
     n = scenario.n_robots
     enc_params = scenario.encoder
-    count_rad = 2.0 * np.pi / enc_params.counts_per_rev if enc_params.counts_per_rev else 0.0
-    phase = rng.uniform(0.0, count_rad, size=(n, 2))
+    phase = encoder_phase(enc_params, n, rng)
     if backend == "scalar" or (backend == "auto" and n <= SCALAR_MAX_ROBOTS):
         return _simulate_scalar(scenario, phase, rec_steps, progress)
 

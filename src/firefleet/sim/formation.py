@@ -43,6 +43,7 @@ from firefleet.sim.drive import (
     discretise_drive,
     drive_init,
     drive_step,
+    encoder_phase,
     speed_control,
 )
 from firefleet.sim.result import SimResult
@@ -265,8 +266,7 @@ def simulate_formation(
     stack = discretise_drive(scenario.robot, scenario.motor, scenario.speed_pid, enc, dt)
     drive: DriveState | None = None
     if diff_drive:
-        count_rad = 2.0 * np.pi / enc.counts_per_rev if enc.counts_per_rev else 0.0
-        drive = drive_init(pose, rng.uniform(0.0, count_rad, size=(n, 2)), stack)
+        drive = drive_init(pose, encoder_phase(enc, n, rng), stack)
     w_max = cmd.max_speed_m_s / scenario.robot.wheel_radius_m
     zero_load = np.zeros((n, 2))
 

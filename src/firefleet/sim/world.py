@@ -50,7 +50,13 @@ from firefleet.estimation.particle_filter import (
 from firefleet.models.encoder import EncoderParams
 from firefleet.models.kinematics import RobotGeometry, body_to_wheels, wrap_angle
 from firefleet.models.motor import MotorParams
-from firefleet.sim.drive import discretise_drive, drive_init, drive_step, speed_control
+from firefleet.sim.drive import (
+    discretise_drive,
+    drive_init,
+    drive_step,
+    encoder_phase,
+    speed_control,
+)
 
 __all__ = [
     "SIM_LOOP",
@@ -347,8 +353,8 @@ def simulate_drive(
         axle_scale=prm.axle_scale,
         slip_variance_m=prm.slip_variance_m,
     )
-    cpr = prm.encoder.counts_per_rev
-    phase = rng.uniform(0.0, stack.count_angle_rad, size=(1, 2)) if cpr else np.zeros((1, 2))
+    # an ideal encoder draws nothing here (the log of a seed stays the same)
+    phase = encoder_phase(prm.encoder, 1, rng) if prm.encoder.counts_per_rev else np.zeros((1, 2))
     drive = drive_init(np.zeros((1, 3)), phase, stack, odometry=True)
     assert drive.odometry is not None
     near = 0
