@@ -50,8 +50,9 @@ def _ref_membership(kind: str, p: list[float], x: FloatArray) -> FloatArray:
     mid = 0.5 * (a + b)
     if a >= b:  # MATLAB: the step at the midpoint
         return ((x >= mid) if kind == "smf" else (x <= mid)) * 1.0
-    rise = 2.0 * ((x - a) / (b - a)) ** 2  # the piece from a to the midpoint
-    fall = 2.0 * ((x - b) / (b - a)) ** 2  # the piece from the midpoint to b
+    with np.errstate(over="ignore"):  # np.select computes every piece everywhere
+        rise = 2.0 * ((x - a) / (b - a)) ** 2  # the piece from a to the midpoint
+        fall = 2.0 * ((x - b) / (b - a)) ** 2  # the piece from the midpoint to b
     if kind == "smf":
         return np.select([x <= a, x <= mid, x <= b], [0.0 * x, rise, 1.0 - fall], 1.0)
     return np.select([x <= a, x <= mid, x <= b], [1.0 + 0.0 * x, 1.0 - rise, fall], 0.0)

@@ -25,7 +25,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from firefleet.control.fuzzy._membership import MF_CODES, membership_one
+from firefleet.control.fuzzy._membership import MF_CODES, membership_one, mf_value
 from firefleet.errors import InputError
 
 if TYPE_CHECKING:
@@ -181,18 +181,25 @@ def eval_one(
     mu0 = n_in
     num0 = n_in + n_mf
     den0 = num0 + n_out
+    and_prod = flags[0] == 1
+    or_probor = flags[1] == 1
     for i in range(n_in):
         work[i] = min(max(x[i], in_range[i, 0]), in_range[i, 1])
     for m in range(n_mf):
-        work[mu0 + m] = membership_one(mf_kind[m], mf_params, m, work[mf_input[m]])
+        work[mu0 + m] = mf_value(
+            mf_kind[m],
+            mf_params[m, 0],
+            mf_params[m, 1],
+            mf_params[m, 2],
+            mf_params[m, 3],
+            work[mf_input[m]],
+        )
     for o in range(n_out):
         work[num0 + o] = 0.0
         work[den0 + o] = 0.0
     for r in range(rule_mf.shape[0]):
         is_or = rule_or[r]
-        w = 0.0 if is_or else 1.0
-        if not is_or and flags[0] == 0:
-            w = 1.0
+        w = 0.0
         started = False
         for i in range(n_in):
             m = rule_mf[r, i]
@@ -203,12 +210,12 @@ def eval_one(
                 w = d
                 started = True
             elif is_or:
-                w = w + d - w * d if flags[1] == 1 else max(w, d)
+                w = w + d - w * d if or_probor else max(w, d)
             else:
-                w = w * d if flags[0] == 1 else min(w, d)
-        if not started:
-            w = 0.0
+                w = w * d if and_prod else min(w, d)
         w *= rule_weight[r]
+        if w == 0.0:  # w z = +-0 (z finite) added to sums that are never -0: no bit changes
+            continue
         for o in range(n_out):
             k = rule_out[r, o]
             if k < 0:

@@ -1,6 +1,6 @@
 """MATLAB's membership functions, defined once as a compiled scalar function.
 
-:func:`membership_one` is the one definition of every input membership function of
+:func:`mf_value` is the one definition of every input membership function of
 the engine. Everything else is built from it: :func:`membership` loops it over an
 array, the system evaluation (:func:`firefleet.control.fuzzy.evaluate`, one sample or
 a batch) and the simulator's compiled team loop call it through
@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError
 
-__all__ = ["MF_CODES", "MfKind", "membership", "membership_one"]
+__all__ = ["MF_CODES", "MfKind", "membership", "membership_one", "mf_value"]
 
 FloatArray = NDArray[np.float64]
 
@@ -87,17 +87,18 @@ def check_mf_params(kind: str, params: Sequence[float], where: str) -> tuple[flo
 
 
 @numba.njit(cache=True)
-def membership_one(kind: int, p: FloatArray, m: int, x: float) -> float:  # pragma: no cover
-    """Degree of ``x`` in membership function ``m``: the engine's one definition.
+def mf_value(
+    kind: int, a: float, b: float, c: float, d: float, x: float
+) -> float:  # pragma: no cover
+    """Degree of ``x`` in a membership function: the engine's one definition.
 
     Parameters
     ----------
     kind : int
         The shape, ``MF_CODES[name]``.
-    p : ndarray, shape (M, 4)
-        Parameters in MATLAB's order, row ``m`` used, padded with zeros.
-    m : int
-        The row.
+    a, b, c, d : float
+        Its parameters in MATLAB's order, padded with zeros (``gaussmf [sigma c]``
+        is ``a = sigma, b = c``; ``sigmf [a c]`` is ``a, b = c``).
     x : float
         The point, finite.
 
@@ -109,7 +110,6 @@ def membership_one(kind: int, p: FloatArray, m: int, x: float) -> float:  # prag
         a >= b are the step at the midpoint; ``gbellmf`` with b < 0 is 0 at its
         centre; values beyond the float range give 0 or 1, never NaN.
     """
-    a, b, c, d = float(p[m, 0]), float(p[m, 1]), float(p[m, 2]), float(p[m, 3])
     if kind == 0:  # trimf [a b c]
         if x == b:
             return 1.0
@@ -149,6 +149,12 @@ def membership_one(kind: int, p: FloatArray, m: int, x: float) -> float:  # prag
     if x <= b:
         return 2.0 * ((x - b) / (b - a)) ** 2
     return 0.0
+
+
+@numba.njit(cache=True)
+def membership_one(kind: int, p: FloatArray, m: int, x: float) -> float:  # pragma: no cover
+    """:func:`mf_value` of membership function ``m``, parameters row ``m`` of ``p`` (M, 4)."""
+    return mf_value(kind, float(p[m, 0]), float(p[m, 1]), float(p[m, 2]), float(p[m, 3]), x)
 
 
 @numba.njit(cache=True)
