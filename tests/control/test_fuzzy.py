@@ -624,3 +624,37 @@ def test_evaluate_csv_errors(text: str, message: str) -> None:
     with pytest.raises(InputError) as info:
         evaluate_csv(system, text, origin="in.csv")
     assert message in str(info.value)
+
+
+# ------------------------------------------------------------------ ranges and the README
+
+
+@pytest.mark.parametrize("value", ["[0 1e308]", "[-1e16 0]", "[-2e15 2e15]"])
+def test_fis_range_beyond_float_resolution_names_file_line_and_key(value: str) -> None:
+    # Range=[0 1e308] used to be read, then crash the plots (matplotlib's arange)
+    with pytest.raises(InputError) as info:
+        parse_fis(_edit("Range=[0 4]", f"Range={value}"), origin="big.fis")
+    message = str(info.value)
+    assert message.startswith("big.fis:16: [Input1] Range=" + value), message
+    assert "within +-1e+15" in message
+
+
+def test_fis_range_at_the_limit_is_accepted() -> None:
+    system = parse_fis(_edit("Range=[0 4]", "Range=[-1e15 1e15]"))
+    assert system.inputs[0].range == (-1e15, 1e15)
+    with pytest.raises(InputError, match=r"input 'x': range ends must lie within \+-1e\+15"):
+        FuzzyInput("x", (0, 1e308), (MembershipFunction("a", "trimf", (0, 1, 2)),))
+
+
+def test_readme_fuzzy_example_runs_as_printed(capsys: pytest.CaptureFixture[str]) -> None:
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    anchor = readme.index("from firefleet.control.fuzzy import evaluate, read_fis")
+    start = readme.rindex("```python\n", 0, anchor) + len("```python\n")
+    code = readme[start : readme.index("```", start)]
+    namespace: dict[str, object] = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    v_omega = namespace["v_omega"]
+    assert isinstance(v_omega, np.ndarray)
+    assert v_omega.shape == (2, 2)
+    np.testing.assert_array_equal(namespace["one"], v_omega[0])
+    assert "['D_rp', 'x_err', 'alpha']" in capsys.readouterr().out
