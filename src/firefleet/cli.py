@@ -484,6 +484,7 @@ def _figure_number(label: str) -> tuple[int, str]:
 
 def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
     from firefleet.perception import stereo
+    from firefleet.report.stereo import run_files
 
     if args.calib is None and not (args.uncalibrated or args.rectified):
         raise InputError("stereo: give --calib FILE, --uncalibrated or --rectified")
@@ -508,9 +509,12 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
     )
     summary = {"left": str(args.left), "right": str(args.right), **run.summary}
     dest = Path(args.out)
+    files = run_files(run)
     with staged_dir(dest) as stage:
-        names = stereo.write_run(run, stage)
+        for name, content in files.items():
+            (stage / name).write_bytes(content)
         (stage / "summary.json").write_text(json_text(summary), encoding="utf-8")
+    names = list(files)
     table = Table(title=f"stereo ({mode})")
     table.add_column("quantity")
     table.add_column("value", justify="right")
@@ -525,21 +529,25 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 def _cmd_capture(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from firefleet.perception.capture import stereo_capture
+    from firefleet.perception import capture
 
     dest = Path(args.out)
+    rows: list[dict[str, Any]] = []
     with staged_dir(dest) as stage, _progress_bar(err, "capture") as progress:
-        rows = stereo_capture(
+        for frame in capture.stereo_capture(
             args.left,
             args.right,
-            stage,
             n_frames=args.frames,
             offset_frames=args.offset,
             every=args.every,
             width=args.width,
             height=args.height,
-            progress=progress,
-        )
+        ):
+            for name, content in capture.pair_files(frame).items():
+                (stage / name).write_bytes(content)
+            rows.append(capture.timestamp_row(frame))
+            progress(len(rows), args.frames)
+        (stage / "timestamps.csv").write_text(capture.timestamps_csv(rows), encoding="utf-8")
     skew = max(abs(r["skew_s"]) for r in rows)
     out.print(
         f"wrote {len(rows)} pair(s) and timestamps.csv to {dest}/ (max skew {skew * 1e3:.1f} ms)",

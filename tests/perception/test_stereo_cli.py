@@ -76,7 +76,7 @@ def test_stereo_rectified_pair_writes_consistent_outputs(
 def test_stereo_calibrated_pair(tmp_path: Path) -> None:
     _, lefts, rights = stereo_chessboards(10)
     calib = st.calibrate_stereo(lefts, rights, pattern_size=PATTERN, square_size_m=SQUARE_M)
-    st.save_calibration(calib, tmp_path / "rig.yaml")
+    (tmp_path / "rig.yaml").write_text(st.calibration_yaml(calib), encoding="utf-8")
     cv2.imwrite(str(tmp_path / "l.png"), lefts[0])
     cv2.imwrite(str(tmp_path / "r.png"), rights[0])
     out = tmp_path / "o"
@@ -126,7 +126,7 @@ def test_stereo_bad_input_exits_2_and_writes_nothing(
     # A calibration made for 640 x 480 images, used on 240 x 160 ones.
     _, lefts, rights = stereo_chessboards(4)
     calib = st.calibrate_stereo(lefts, rights, pattern_size=PATTERN, square_size_m=SQUARE_M)
-    st.save_calibration(calib, tmp_path / "rig.yaml")
+    (tmp_path / "rig.yaml").write_text(st.calibration_yaml(calib), encoding="utf-8")
     args = ["stereo", str(pair[0]), str(pair[1]), "--calib", str(tmp_path / "rig.yaml")]
     assert main([*args, "--out", str(out)]) == 2
     assert "calibration is for 640 x 480 px images, these are 240 x 160" in _one_error_line(capsys)
