@@ -505,6 +505,7 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
         doffs_px=args.doffs_px,
         min_disparity=args.min_disparity,
         num_disparities=args.num_disparities,
+        min_depth_m=args.min_depth_m,
         n_sectors=args.sectors,
     )
     summary = {"left": str(args.left), "right": str(args.right), **run.summary}
@@ -519,11 +520,27 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
     table.add_column("quantity")
     table.add_column("value", justify="right")
     for key, value in summary.items():
-        if isinstance(value, float):
+        if isinstance(value, bool):
+            table.add_row(key, "[red]YES" if value else "no")
+        elif isinstance(value, float):
             table.add_row(key, f"{value:.6g}")
         elif isinstance(value, int):
             table.add_row(key, str(value))
     out.print(table)
+    if summary.get("search_saturated"):
+        err.print(
+            f"warning: {summary['saturated_pct']:.1f} % of the pixels matched at the end of "
+            f"the disparity search ({summary['num_disparities']} px): something is nearer "
+            "than it measures; nearest_obstacle_m is not reported"
+            + (
+                f" (nearer than {summary['obstacle_nearer_than_m']:.3g} m)"
+                if summary.get("obstacle_nearer_than_m") is not None
+                else ""
+            )
+            + "; widen --num-disparities or leave it out",
+            markup=False,
+            highlight=False,
+        )
     out.print(f"wrote {dest}/: {', '.join([*names, 'summary.json'])}", markup=False)
     return EXIT_OK
 
@@ -577,7 +594,20 @@ def _add_stereo_parsers(sub: Any) -> None:
     st.add_argument("--baseline-m", type=float, help="baseline [m] (with --rectified)")
     st.add_argument("--doffs-px", type=float, default=0.0, help="cx_right - cx_left [px]")
     st.add_argument("--min-disparity", type=int, default=0, metavar="PX")
-    st.add_argument("--num-disparities", type=int, default=64, metavar="N", help="multiple of 16")
+    st.add_argument(
+        "--num-disparities",
+        type=int,
+        metavar="N",
+        help="disparities to search, a multiple of 16 (default: found coarse to fine, "
+        "down to --min-depth-m)",
+    )
+    st.add_argument(
+        "--min-depth-m",
+        type=float,
+        default=0.3,
+        metavar="M",
+        help="nearest depth the default search range measures [m] (default 0.3)",
+    )
     st.add_argument("--sectors", type=int, default=32, metavar="K", help="range-scan sectors")
     st.add_argument("--out", metavar="DIR", default="stereo-out", help="output folder")
     cap = sub.add_parser("capture", help="frame-synchronised pairs from two cameras or videos")

@@ -45,6 +45,7 @@ from firefleet.perception.stereo._disparity import (
     DisparityResult,
     compute_disparity,
     sgbm_disparity,
+    texture,
 )
 from firefleet.perception.stereo._geometry import (
     RangeScan,
@@ -54,7 +55,13 @@ from firefleet.perception.stereo._geometry import (
     range_scan,
 )
 from firefleet.perception.stereo._images import check_pair, read_image
-from firefleet.perception.stereo._pipeline import StereoRun, process_pair
+from firefleet.perception.stereo._pipeline import (
+    SATURATED_SHARE,
+    StereoRun,
+    depth_limits,
+    process_pair,
+    search_range_for,
+)
 from firefleet.perception.stereo._rectify import (
     Rectification,
     match_features,
@@ -65,6 +72,7 @@ from firefleet.perception.stereo._rectify import (
 
 __all__ = [
     "CALIBRATION_FORMAT",
+    "SATURATED_SHARE",
     "DisparityResult",
     "RangeScan",
     "Rectification",
@@ -75,6 +83,7 @@ __all__ = [
     "check_pair",
     "compute_disparity",
     "depth_from_disparity",
+    "depth_limits",
     "find_chessboard",
     "load_calibration",
     "match_features",
@@ -86,5 +95,7 @@ __all__ = [
     "rectify_calibrated",
     "rectify_pair",
     "rectify_uncalibrated",
+    "search_range_for",
     "sgbm_disparity",
+    "texture",
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -9,7 +10,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError
-from firefleet.perception.stereo._images import Float32Array, Image, check_pair
+from firefleet.perception.stereo._images import (
+    Float32Array,
+    Image,
+    _check_image,
+    _grey,
+    check_pair,
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -27,11 +34,25 @@ class DisparityResult:
         In [0, 1]: 0 where not measured; elsewhere the share of measured neighbours in
         a 5 x 5 window times ``1 / (1 + var)``, ``var`` the local disparity variance
         [px^2] of those neighbours (smooth, well-supported surfaces near 1).
+    saturated : ndarray of bool, shape (H, W), or None
+        True where the best match lay at the largest disparity searched
+        (``min + num - 1``): the surface is at least that near, maybe nearer, so the
+        value is no measurement; these pixels are NaN in ``disparity`` (never filled).
+    textureless : ndarray of bool, shape (H, W), or None
+        True where the left image has too little horizontal texture to match (a flat
+        area wider than the matching window); not ``measured``.
     """
 
     disparity: Float32Array
     measured: NDArray[np.bool_]
     confidence: Float32Array
+    saturated: NDArray[np.bool_] | None = None
+    textureless: NDArray[np.bool_] | None = None
+
+    @property
+    def saturated_share(self) -> float:
+        """Share of pixels whose best match lay at the near end of the search range."""
+        return 0.0 if self.saturated is None else float(self.saturated.mean())
 
 
 def _check_num_disparities(num: int, width: int) -> None:
@@ -159,6 +180,36 @@ def _confidence(disp: Float32Array, measured: NDArray[np.bool_]) -> Float32Array
     return np.asarray(conf, dtype=np.float32)
 
 
+def texture(image: ArrayLike, *, window_px: int = 7) -> Float32Array:
+    """Horizontal texture of an image: the local mean of ``|dI/dx|`` [grey levels / px].
+
+    The central difference ``(I[x+1] - I[x-1]) / 2`` of the grey image, its absolute
+    value averaged over a ``window_px`` square. Matching along rows needs it: where it
+    is about zero (a flat wall, a black frame, the sky) every disparity fits equally.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W) or (H, W, 3)
+    window_px : int
+        Side of the averaging window [px] (odd).
+
+    Returns
+    -------
+    ndarray of float32, shape (H, W)
+    """
+    img = _check_image(image, "image")
+    if window_px < 1 or window_px % 2 == 0:
+        raise InputError(f"window_px must be odd and >= 1, got {window_px}")
+    g = _grey(img).astype(np.float32)
+    dx = np.zeros_like(g)
+    dx[:, 1:-1] = 0.5 * np.abs(g[:, 2:] - g[:, :-2])
+    k = (window_px, window_px)
+    return np.asarray(
+        cv2.boxFilter(dx, -1, k, normalize=True, borderType=cv2.BORDER_REPLICATE),
+        dtype=np.float32,
+    )
+
+
 def compute_disparity(
     left: ArrayLike,
     right: ArrayLike,
@@ -172,13 +223,18 @@ def compute_disparity(
     speckle_range_px: int = 2,
     fill_holes: bool = True,
     median_px: int = 5,
+    min_texture: float = 0.5,
 ) -> DisparityResult:
     """Disparity of a rectified pair: SGBM, then checks, confidence and hole filling.
 
     1. Semi-global matching [1]_ in OpenCV's parallel three-way mode
        (``MODE_SGBM_3WAY``), colour if given, ``P1 = 8 cn b^2``, ``P2 = 24 cn b^2``,
        sub-pixel by parabola fitting (1/16 px).
-    2. Checks: uniqueness (the best cost ``uniqueness_pct`` % below the second best),
+    2. A best match at either end of the search range is no measurement: at the far
+       end (``min``) the surface may be farther, at the near end (``min + num - 1``) it
+       may be nearer (``saturated``: kept NaN, never filled). Pixels with less
+       horizontal texture than ``min_texture`` (:func:`texture`) are not measured.
+       Checks: uniqueness (the best cost ``uniqueness_pct`` % below the second best),
        left-right consistency (``disp12MaxDiff``: the right view's disparity, taken from
        the same aggregated costs as in [1]_, within ``lr_max_diff_px``), and a tight
        speckle filter (regions under ``speckle_window_px`` pixels whose disparity
@@ -201,6 +257,9 @@ def compute_disparity(
         Step 4 (and 5); without it, rejected pixels are NaN.
     median_px : int
         Median window, 0 (none), 3 or 5.
+    min_texture : float
+        Least mean ``|dI/dx|`` in a 7 x 7 window for a pixel to count as measured
+        [grey levels / px]; 0 disables the test.
 
     Returns
     -------
@@ -223,7 +282,14 @@ def compute_disparity(
         lr_max_diff_px=lr_max_diff_px,
         mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
     )
-    measured = ~np.isnan(disp)
+    if not (math.isfinite(min_texture) and min_texture >= 0):
+        raise InputError(f"min_texture must be >= 0, got {min_texture}")
+    # SGBM gives exact integers at the ends of the range (no sub-pixel fit there)
+    near_end = np.float32(min_disparity + num_disparities - 1)
+    saturated = disp == near_end
+    disp[saturated | (disp == np.float32(min_disparity))] = np.nan
+    textureless = texture(lft) < min_texture
+    measured = ~np.isnan(disp) & ~textureless
     confidence = _confidence(disp, measured)
     if fill_holes:
         disp = _fill_background(disp)
@@ -231,6 +297,11 @@ def compute_disparity(
             nan = np.isnan(disp)
             med = cv2.medianBlur(np.where(nan, np.float32(0.0), disp), median_px)
             disp = np.where(nan, np.float32(np.nan), med)
+        disp[saturated] = np.nan
     return DisparityResult(
-        disparity=np.asarray(disp, dtype=np.float32), measured=measured, confidence=confidence
+        disparity=np.asarray(disp, dtype=np.float32),
+        measured=measured,
+        confidence=confidence,
+        saturated=saturated,
+        textureless=textureless,
     )

@@ -183,6 +183,7 @@ def range_scan(
     height_band_m: tuple[float, float] | None = None,
     max_range_m: float = math.inf,
     min_points: int = 1,
+    min_share: float = 0.0,
 ) -> RangeScan:
     """The nearest obstacle distance in each of K bearing sectors (a virtual laser scan).
 
@@ -203,6 +204,9 @@ def range_scan(
     min_points : int
         A sector reports its ``min_points``-th nearest point (1: the nearest), so a
         few stray points do not make a phantom obstacle.
+    min_share : float
+        Or, if more, its ``ceil(min_share * n)``-th nearest of its ``n`` points (a
+        cluster of bad matches scales with the points seen).
 
     Returns
     -------
@@ -215,6 +219,8 @@ def range_scan(
         raise InputError(f"fov_rad must be in (0, 2 pi), got {fov_rad}")
     if min_points < 1:
         raise InputError(f"min_points must be >= 1, got {min_points}")
+    if not 0.0 <= min_share < 1.0:
+        raise InputError(f"min_share must be in [0, 1), got {min_share}")
     edges = np.linspace(-fov_rad / 2, fov_rad / 2, n_sectors + 1)
     bearing = np.arctan2(-pts[:, 0], pts[:, 2])
     rng = np.hypot(pts[:, 0], pts[:, 2])
@@ -232,8 +238,9 @@ def range_scan(
     count = np.bincount(sector, minlength=n_sectors).astype(np.int64)
     start = np.concatenate([[0], np.cumsum(count)[:-1]])
     ranges = np.full(n_sectors, np.inf)
-    has = count >= min_points
-    ranges[has] = r[start[has] + min_points - 1]
+    kth = np.maximum(min_points, np.ceil(min_share * count).astype(np.int64))
+    has = count >= kth
+    ranges[has] = r[start[has] + kth[has] - 1]
     return RangeScan(
         bearing_rad=0.5 * (edges[:-1] + edges[1:]), edges_rad=edges, range_m=ranges, count=count
     )
