@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -306,16 +307,23 @@ def _fis_tables(system: SugenoSystem) -> list[Table]:
 # ------------------------------------------------------------------ thermal (issue 5)
 
 
+def _check_flag(ok: bool, flag: str, value: Any, expected: str) -> None:
+    """Raise an InputError naming the flag a person typed unless ``ok``."""
+    if not ok:
+        raise InputError(f"{flag} must be {expected}, got {value}")
+
+
 def _cmd_thermal(args: argparse.Namespace, out: Console, err: Console) -> int:
     from firefleet.perception import thermal as th  # scipy.ndimage only when needed
-    from firefleet.report.thermal import detection_png
+    from firefleet.report.thermal import detection_png, figure_names
 
+    _check_flag(0.0 < args.hfov_deg < 180.0, "--hfov-deg", args.hfov_deg, "in (0, 180) degrees")
+    if args.fire_width_m is not None:
+        _check_flag(args.fire_width_m > 0.0, "--fire-width-m", args.fire_width_m, "> 0 [m]")
     calibration = th.LinearCalibration.parse(args.counts) if args.counts else None
     params = th.DetectionParams(fire_width_m=args.fire_width_m)
     paths = th.frame_paths(args.frames)
-    names = [p.name for p in paths]
-    if len(set(names)) != len(names):
-        raise InputError("two frames share a file name; their outputs would collide")
+    pictures = figure_names(paths)
     dest = Path(args.out)
     documents: list[dict[str, Any]] = []
     with staged_dir(dest) as stage, _progress_bar(err, "thermal frames") as progress:
@@ -323,9 +331,11 @@ def _cmd_thermal(args: argparse.Namespace, out: Console, err: Console) -> int:
             frame = th.read_frame(path, calibration=calibration)
             camera = th.CameraModel.for_frame(frame.shape, hfov_deg=args.hfov_deg)
             result = th.detect(frame, camera=camera, params=params)
-            documents.append(th.detections_document(path.name, result))
+            documents.append(
+                {**th.detections_document(path.name, result), "figure": pictures[i]}
+            )
             png = detection_png(result.filtered_c, result, title=path.name)
-            (stage / f"{path.stem}.png").write_bytes(png)
+            (stage / pictures[i]).write_bytes(png)
             progress(i + 1, len(paths))
         (stage / "detections.json").write_text(json_text(documents), encoding="utf-8")
     table = Table(title="thermal detections")
@@ -492,8 +502,27 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
         raise InputError("stereo: --rectified and --uncalibrated exclude each other")
     if (args.focal_px is None) != (args.baseline_m is None):
         raise InputError("stereo: --focal-px and --baseline-m go together")
+    for flag, value in (("--focal-px", args.focal_px), ("--baseline-m", args.baseline_m)):
+        if value is not None:
+            _check_flag(math.isfinite(value) and value > 0.0, flag, value, "a number > 0")
+    _check_flag(math.isfinite(args.doffs_px), "--doffs-px", args.doffs_px, "a finite number")
+    _check_flag(
+        math.isfinite(args.min_depth_m) and args.min_depth_m > 0.0,
+        "--min-depth-m",
+        args.min_depth_m,
+        "a number > 0 [m]",
+    )
+    _check_flag(args.sectors >= 1, "--sectors", args.sectors, ">= 1")
     calib = stereo.load_calibration(args.calib) if args.calib else None
     left, right = stereo.read_image(args.left), stereo.read_image(args.right)
+    if args.num_disparities is not None:
+        width = left.shape[1]
+        _check_flag(
+            0 < args.num_disparities < width and args.num_disparities % 16 == 0,
+            "--num-disparities",
+            args.num_disparities,
+            f"a positive multiple of 16 below the image width {width} px",
+        )
     mode = "rectified" if args.rectified else "uncalibrated" if args.uncalibrated else "calibrated"
     run = stereo.process_pair(
         left,
@@ -548,6 +577,12 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
 def _cmd_capture(args: argparse.Namespace, out: Console, err: Console) -> int:
     from firefleet.perception import capture
 
+    _check_flag(args.frames >= 1, "--frames", args.frames, ">= 1")
+    _check_flag(args.offset >= 0, "--offset", args.offset, ">= 0")
+    _check_flag(args.every >= 1, "--every", args.every, ">= 1")
+    for flag, size in (("--width", args.width), ("--height", args.height)):
+        if size is not None:
+            _check_flag(size > 0, flag, size, "> 0 [px]")
     dest = Path(args.out)
     rows: list[dict[str, Any]] = []
     with staged_dir(dest) as stage, _progress_bar(err, "capture") as progress:

@@ -120,3 +120,43 @@ def test_capture_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     ]
     assert not bad.exists()
     assert not list(tmp_path.glob(".bad.staging-*"))
+
+
+def test_opencv_log_lines_do_not_reach_the_terminal(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # OpenCV writes "[ WARN:0@...]" lines to file descriptor 2 when a camera or a video
+    # cannot be opened; capfd sees them (capsys would not).
+    junk = tmp_path / "junk.avi"
+    junk.write_bytes(b"not a video at all")
+    for source in ("/dev/video63", str(junk)):
+        assert main(["capture", source, source, "--out", str(tmp_path / "o")]) == 2
+        err = capfd.readouterr().err.strip().splitlines()
+        assert len(err) == 1, err
+        assert err[0].startswith("firefleet: error: ")
+        assert "WARN" not in err[0]
+    # The library leaves OpenCV's log level as it found it.
+    before = cv2.utils.logging.getLogLevel()
+    with pytest.raises(InputError):
+        open_source("/dev/video63")
+    assert cv2.utils.logging.getLogLevel() == before
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (["--frames", "0"], "--frames must be >= 1, got 0"),
+        (["--offset", "-1"], "--offset must be >= 0, got -1"),
+        (["--every", "0"], "--every must be >= 1, got 0"),
+        (["--width", "0"], "--width must be > 0 [px], got 0"),
+    ],
+)
+def test_capture_errors_name_the_flag(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], flags: list[str], named: str
+) -> None:
+    video = tmp_path / "cam.avi"
+    write_video(video, 4)
+    out = tmp_path / "o"
+    assert main(["capture", str(video), str(video), *flags, "--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"firefleet: error: {named}"]
+    assert not out.exists()

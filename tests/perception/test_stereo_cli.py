@@ -139,3 +139,40 @@ def test_stereo_bad_input_exits_2_and_writes_nothing(
     assert "none.png: no such image file" in _one_error_line(capsys)
     assert not out.exists()
     assert not list(tmp_path.glob(".o.staging-*"))
+
+
+def test_corrupt_png_gives_our_message_not_opencvs(
+    pair: tuple[Path, Path], tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # A PNG signature followed by garbage: OpenCV's decoder logs "[ WARN:0@...]" and
+    # "[ERROR:0@...]" lines to file descriptor 2 unless silenced.
+    broken = tmp_path / "broken.png"
+    broken.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\x00" * 40)
+    out = tmp_path / "o"
+    assert main(["stereo", str(broken), str(pair[1]), "--rectified", "--out", str(out)]) == 2
+    err = capfd.readouterr().err.strip().splitlines()
+    assert err == [f"firefleet: error: {broken}: not a readable image (empty or corrupt)"]
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (["--num-disparities", "40"], "--num-disparities must be a positive multiple of 16"),
+        (["--num-disparities", "256"], "below the image width 240 px, got 256"),
+        (["--min-depth-m", "0"], "--min-depth-m must be a number > 0 [m], got 0.0"),
+        (["--focal-px", "-5", "--baseline-m", "0.1"], "--focal-px must be a number > 0"),
+        (["--sectors", "0"], "--sectors must be >= 1, got 0"),
+    ],
+)
+def test_stereo_errors_name_the_flag(
+    pair: tuple[Path, Path],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    flags: list[str],
+    named: str,
+) -> None:
+    out = tmp_path / "o"
+    args = ["stereo", str(pair[0]), str(pair[1]), "--rectified", *flags, "--out", str(out)]
+    assert main(args) == 2
+    assert named in _one_error_line(capsys)
+    assert not out.exists()

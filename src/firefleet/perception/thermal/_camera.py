@@ -62,6 +62,8 @@ class CameraModel:
         """An undistorted camera of the frame's size (rows, cols) and a field of view [deg]."""
         if len(shape) != 2:
             raise InputError(f"frame shape must be (H, W), got {shape}")
+        if not 0.0 < hfov_deg < 180.0:
+            raise InputError(f"hfov_deg must be in (0, 180) degrees, got {hfov_deg}")
         return cls(width_px=int(shape[1]), height_px=int(shape[0]), hfov_rad=math.radians(hfov_deg))
 
     @property
