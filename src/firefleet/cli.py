@@ -331,9 +331,7 @@ def _cmd_thermal(args: argparse.Namespace, out: Console, err: Console) -> int:
             frame = th.read_frame(path, calibration=calibration)
             camera = th.CameraModel.for_frame(frame.shape, hfov_deg=args.hfov_deg)
             result = th.detect(frame, camera=camera, params=params)
-            documents.append(
-                {**th.detections_document(path.name, result), "figure": pictures[i]}
-            )
+            documents.append({**th.detections_document(path.name, result), "figure": pictures[i]})
             png = detection_png(result.filtered_c, result, title=path.name)
             (stage / pictures[i]).write_bytes(png)
             progress(i + 1, len(paths))
@@ -360,17 +358,24 @@ def _add_thermal_parser(sub: Any) -> None:
     thermal.add_argument(
         "frames", nargs="+", metavar="FRAME", help=".npy (C) or image; or a folder"
     )
-    thermal.add_argument("--out", metavar="DIR", default="runs/thermal", help="output folder")
+    thermal.add_argument(
+        "--out", metavar="DIR", default="runs/thermal", help="output folder (default runs/thermal)"
+    )
     thermal.add_argument(
         "--counts",
         metavar="CAL",
         help="frames hold counts: 'tlinear' (0.01 K), 'tlinear10' (0.1 K) or 'GAIN,OFFSET' (C)",
     )
     thermal.add_argument(
-        "--hfov-deg", type=float, default=51.0, help="horizontal field of view (Lepton: 51)"
+        "--hfov-deg",
+        type=float,
+        default=51.0,
+        help="horizontal field of view [deg] (default 51, the Lepton's)",
     )
     thermal.add_argument(
-        "--fire-width-m", type=float, help="size prior of a fire [m]: gives fires a range"
+        "--fire-width-m",
+        type=float,
+        help="size prior of a fire [m]: gives fires a range (default: none)",
     )
 
 
@@ -627,8 +632,16 @@ def _add_stereo_parsers(sub: Any) -> None:
     )
     st.add_argument("--focal-px", type=float, help="rectified focal length [px] (with --rectified)")
     st.add_argument("--baseline-m", type=float, help="baseline [m] (with --rectified)")
-    st.add_argument("--doffs-px", type=float, default=0.0, help="cx_right - cx_left [px]")
-    st.add_argument("--min-disparity", type=int, default=0, metavar="PX")
+    st.add_argument(
+        "--doffs-px", type=float, default=0.0, help="cx_right - cx_left [px] (default 0)"
+    )
+    st.add_argument(
+        "--min-disparity",
+        type=int,
+        default=0,
+        metavar="PX",
+        help="start of the disparity search [px] (default 0)",
+    )
     st.add_argument(
         "--num-disparities",
         type=int,
@@ -643,17 +656,25 @@ def _add_stereo_parsers(sub: Any) -> None:
         metavar="M",
         help="nearest depth the default search range measures [m] (default 0.3)",
     )
-    st.add_argument("--sectors", type=int, default=32, metavar="K", help="range-scan sectors")
-    st.add_argument("--out", metavar="DIR", default="stereo-out", help="output folder")
+    st.add_argument(
+        "--sectors", type=int, default=32, metavar="K", help="range-scan sectors (default 32)"
+    )
+    st.add_argument(
+        "--out", metavar="DIR", default="stereo-out", help="output folder (default stereo-out)"
+    )
     cap = sub.add_parser("capture", help="frame-synchronised pairs from two cameras or videos")
     cap.add_argument("left", metavar="LEFT", help="/dev/videoN, a camera index, or a video file")
     cap.add_argument("right", metavar="RIGHT", help="/dev/videoN, a camera index, or a video file")
     cap.add_argument("--out", metavar="DIR", required=True, help="output folder")
-    cap.add_argument("--frames", type=int, default=1, metavar="N", help="pairs to save")
-    cap.add_argument("--offset", type=int, default=0, metavar="K", help="skip K right frames")
-    cap.add_argument("--every", type=int, default=1, metavar="K", help="keep every K-th pair")
-    cap.add_argument("--width", type=int, help="camera width [px]")
-    cap.add_argument("--height", type=int, help="camera height [px]")
+    cap.add_argument("--frames", type=int, default=1, metavar="N", help="pairs to save (default 1)")
+    cap.add_argument(
+        "--offset", type=int, default=0, metavar="K", help="skip K right frames (default 0)"
+    )
+    cap.add_argument(
+        "--every", type=int, default=1, metavar="K", help="keep every K-th pair (default 1)"
+    )
+    cap.add_argument("--width", type=int, help="camera width [px] (default: the camera's)")
+    cap.add_argument("--height", type=int, help="camera height [px] (default: the camera's)")
 
 
 # ------------------------------------------------------------------------------

@@ -62,6 +62,11 @@ class LinearCalibration:
             raise InputError(
                 f"--counts must be 'tlinear', 'tlinear10' or 'GAIN,OFFSET', got {text!r}"
             ) from None
+        if not (math.isfinite(gain) and gain > 0 and math.isfinite(offset)):
+            raise InputError(
+                f"--counts GAIN,OFFSET needs a finite GAIN > 0 (C per count) and a finite "
+                f"OFFSET (C), got {text!r}"
+            )
         return cls(gain_c_per_count=gain, offset_c=offset, max_count=65535)
 
 
