@@ -79,6 +79,17 @@ def test_board_nearer_than_64_px_of_disparity_with_default_options(
     assert s["min_depth_m"] == 0.3
 
 
+@pytest.mark.parametrize("distance_m", [0.35, 1.5])
+def test_board_at_other_distances_with_default_options(distance_m: float) -> None:
+    # Near the default minimum depth (0.3 m: 177 px of disparity) and far (41 px).
+    rig, left, right = board_facing(distance_m, baseline_m=0.1)
+    s = st.process_pair(left, right, calib=_calibration(rig)).summary
+    assert not s["search_saturated"]
+    assert s["depth_near_limit_m"] < distance_m < s["depth_far_limit_m"]
+    assert s["nearest_obstacle_m"] == pytest.approx(distance_m, rel=0.01)
+    assert s["depth_median_m"] == pytest.approx(distance_m, rel=0.01)
+
+
 def test_saturated_search_is_flagged_not_reported_as_a_depth(
     board: tuple[st.StereoCalibration, Image, Image],
 ) -> None:
