@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from firefleet.control.fuzzy import MfKind, SugenoSystem, evaluate, membership
 from firefleet.control.fuzzy_kernel import compile_system, eval_one
-from tests.control.test_fuzzy import _finite, _systems
+from tests.control.fuzzy_systems import finite, systems
 
 FloatArray = np.ndarray
 
@@ -104,17 +104,17 @@ def _mf_case(draw: st.DrawFn) -> tuple[MfKind, list[float], list[float]]:
         st.sampled_from(["trimf", "trapmf", "gaussmf", "gbellmf", "sigmf", "smf", "zmf"])
     )
     grid = st.sampled_from([-2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0])  # ties likely
-    value = st.one_of(grid, _finite(-10, 10))
+    value = st.one_of(grid, finite(-10, 10))
     if kind in ("trimf", "trapmf"):
         n = 3 if kind == "trimf" else 4
         p = sorted(draw(st.lists(value, min_size=n, max_size=n)))
         if kind == "trapmf" and draw(st.booleans()):  # b > c: MATLAB's flat-topped triangle
             p = [p[0], p[2], p[1], p[3]]
     elif kind == "gaussmf":
-        p = [draw(st.one_of(_finite(0.01, 5), _finite(-5, -0.01))), draw(value)]
+        p = [draw(st.one_of(finite(0.01, 5), finite(-5, -0.01))), draw(value)]
     elif kind == "gbellmf":
-        a = draw(st.one_of(_finite(0.01, 5), _finite(-5, -0.01)))
-        p = [a, draw(st.one_of(grid, _finite(-4, 4))), draw(value)]
+        a = draw(st.one_of(finite(0.01, 5), finite(-5, -0.01)))
+        p = [a, draw(st.one_of(grid, finite(-4, 4))), draw(value)]
     else:  # sigmf, smf, zmf: any two numbers (smf/zmf with a >= b are steps)
         p = draw(st.lists(value, min_size=2, max_size=2))
     points = draw(st.lists(value, min_size=1, max_size=20))
@@ -159,10 +159,10 @@ def test_compiled_membership_breakpoints_exactly() -> None:
 @settings(max_examples=80, deadline=None)
 @given(st.data())
 def test_evaluate_equals_numpy_reference_random_systems(data: st.DataObject) -> None:
-    system = data.draw(_systems())
+    system = data.draw(systems())
     n_in = len(system.inputs)
     rows = data.draw(
-        st.lists(st.lists(_finite(-12, 12), min_size=n_in, max_size=n_in), min_size=1, max_size=8)
+        st.lists(st.lists(finite(-12, 12), min_size=n_in, max_size=n_in), min_size=1, max_size=8)
     )
     x = np.array(rows)
     batch = evaluate(system, x)
