@@ -55,7 +55,29 @@ def fis_text(system: SugenoSystem) -> str:
     """The system as MATLAB ``.fis`` text (``writefis``'s Version 2.0 layout).
 
     Numbers are written with the shortest representation that reads back to the
-    same float, so :func:`parse_fis` of this text gives an equal system.
+    same float, so :func:`parse_fis` of this text gives an equal system. The text is
+    returned; saving it is the caller's (``Path(name).write_text(fis_text(system))``).
+
+    Parameters
+    ----------
+    system : SugenoSystem
+        The system.
+
+    Returns
+    -------
+    str
+        The ``.fis`` text, lines ending in ``\\n``.
+
+    Examples
+    --------
+    >>> from firefleet.control.fuzzy import fis_text, parse_fis, read_fis
+    >>> from firefleet.control.path_following import builtin_fis_path
+    >>> system = read_fis(builtin_fis_path("lambda_correction"))
+    >>> text = fis_text(system)
+    >>> text.splitlines()[:3]
+    ['[System]', "Name='lambda_correction'", "Type='sugeno'"]
+    >>> parse_fis(text) == system
+    True
     """
     lines = [
         "[System]",

@@ -96,7 +96,8 @@ class FuzzyInput:
         Its name (a column name in ``firefleet fis --eval``); a unit may follow in
         brackets, ``"D_rp [m]"``, and is shown on plots.
     range : tuple of float
-        (min, max) of the variable; inputs outside are clipped to it.
+        (min, max) of the variable; inputs outside are clipped to it. Both ends
+        within +-1e15 (``RANGE_LIMIT``).
     mfs : tuple of MembershipFunction
         Its membership functions; rules refer to them by 1-based position.
     """
@@ -163,6 +164,7 @@ class FuzzyOutput:
     range : tuple of float
         (min, max); its midpoint is the output when no rule fires (``wtaver``).
         Sugeno outputs are not clipped to it (MATLAB does not clip them either).
+        Both ends within +-1e15.
     mfs : tuple of SugenoOutputMf
         Its consequents; rules refer to them by 1-based position.
     """
