@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from firefleet.control.fuzzy import (
     FuzzyInput,
@@ -149,6 +150,8 @@ def _edit(old: str, new: str) -> str:
         (_edit("AndMethod='prod'", "AndMethod='mymin'"), 8, "AndMethod 'mymin' is not supported"),
         (_edit("Version=2.0", "Version=3.0"), 4, "only .fis versions 1.0 and 2.0"),
         (_edit("Name='dist'", "Nme='dist'"), 15, "unknown key 'Nme' in [Input1]"),
+        # a bare MF key (found by the mutation test below; it raised ValueError)
+        (_edit("MF2='far'", "MF='far'"), 19, "unknown key 'MF' in [Input1]"),
         (_edit("NumInputs=2", "NumInputs=two"), 5, "NumInputs must be a whole number"),
     ],
 )
@@ -238,3 +241,72 @@ def test_readme_fuzzy_example_runs_as_printed(capsys: pytest.CaptureFixture[str]
     assert v_omega.shape == (2, 2)
     np.testing.assert_array_equal(namespace["one"], v_omega[0])
     assert "['D_rp', 'x_err', 'alpha']" in capsys.readouterr().out
+
+
+@st.composite
+def _mutated_fis(draw: st.DrawFn) -> str:
+    """The good file with a few random edits: deleted, replaced or inserted text."""
+    text = GOOD
+    for _ in range(draw(st.integers(1, 4))):
+        at = draw(st.integers(0, len(text)))
+        cut = draw(st.integers(0, 12))
+        new = draw(
+            st.one_of(
+                st.text(max_size=8),
+                st.sampled_from(
+                    [
+                        "1e308",
+                        "-1e400",
+                        "nan",
+                        "inf",
+                        "0",
+                        "-1",
+                        "[",
+                        "]",
+                        "'",
+                        ",",
+                        ":",
+                        "\n",
+                        "=",
+                        "(",
+                        ")",
+                        "2.5",
+                        "[Input3]",
+                    ]
+                ),
+            )
+        )
+        text = text[:at] + new + text[at + cut :]
+    return text
+
+
+@settings(max_examples=300, deadline=None)
+@given(_mutated_fis())
+def test_mutated_fis_text_is_read_or_rejected_with_input_error(text: str) -> None:
+    """Random edits of a valid file: a valid system or one InputError with file and
+    line, never another exception; what is read evaluates to finite numbers."""
+    system: SugenoSystem | None = None
+    message = ""
+    try:
+        system = parse_fis(text, origin="m.fis")
+    except InputError as exc:
+        message = str(exc)
+    if system is None:
+        assert message.startswith("m.fis:"), message
+        assert "\n" not in message.strip()
+        return
+    x = np.array([[v.range[0], v.range[1]][k % 2] for k, v in enumerate(system.inputs)])
+    assert np.all(np.isfinite(evaluate(system, x)))
+    assert parse_fis(fis_text(system)) == system
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.binary(max_size=300))
+def test_random_bytes_are_rejected_with_input_error(
+    tmp_path_factory: pytest.TempPathFactory, data: bytes
+) -> None:
+    path = tmp_path_factory.mktemp("fis") / "r.fis"
+    path.write_bytes(data)
+    with pytest.raises(InputError) as info:
+        read_fis(path)
+    assert str(info.value).startswith(f"{path}:")

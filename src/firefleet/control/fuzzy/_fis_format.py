@@ -202,7 +202,8 @@ class _Parser:
             if not m:
                 self.fail(line, f"expected key=value in [{self.label(section)}], got {text!r}")
             key, value = m.group(1), m.group(2).strip()
-            canonical = next((k for k in allowed if k.lower() == key.lower()), None)
+            # "MF" in allowed stands for the numbered keys MF1, MF2, ...; bare "MF" is unknown
+            canonical = next((k for k in allowed if k != "MF" and k.lower() == key.lower()), None)
             if canonical is None and re.fullmatch(r"MF\d+", key, re.IGNORECASE) and "MF" in allowed:
                 canonical = "MF" + str(int(key[2:]))
             if canonical is None:
