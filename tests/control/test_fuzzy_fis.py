@@ -152,6 +152,9 @@ def _edit(old: str, new: str) -> str:
         (_edit("Name='dist'", "Nme='dist'"), 15, "unknown key 'Nme' in [Input1]"),
         # a bare MF key (found by the mutation test below; it raised ValueError)
         (_edit("MF2='far'", "MF='far'"), 19, "unknown key 'MF' in [Input1]"),
+        # a huge count (found by fuzzing; it raised OverflowError or MemoryError)
+        (_edit("NumMFs=2\nMF1='near'", "NumMFs=1e308\nMF1='near'"), 17, "missing MF3"),
+        (_edit("NumMFs=2\nMF1='near'", "NumMFs=51e15\nMF1='near'"), 17, "missing MF3"),
         (_edit("NumInputs=2", "NumInputs=two"), 5, "NumInputs must be a whole number"),
     ],
 )

@@ -348,12 +348,13 @@ class _Parser:
         line, value = self.required(found, "NumMFs", sec)
         n_mfs = self.integer(line, "NumMFs", value)
         mf_keys = sorted((int(k[2:]), k) for k in found if k.startswith("MF"))
-        numbers = [n for n, _ in mf_keys]
-        if numbers != list(range(1, n_mfs + 1)):
-            missing = sorted(set(range(1, n_mfs + 1)) - set(numbers))
-            extra = sorted(set(numbers) - set(range(1, n_mfs + 1)))
-            what = f"missing MF{missing[0]}" if missing else f"MF{extra[0]} beyond NumMFs={n_mfs}"
-            where = found[f"MF{extra[0]}"][0] if extra and not missing else line
+        numbers = {n for n, _ in mf_keys}
+        # lazily: NumMFs may be huge (1e308), the first gap is at most len(numbers) + 1
+        missing = next((k for k in range(1, n_mfs + 1) if k not in numbers), None)
+        extra = sorted(n for n in numbers if not 1 <= n <= n_mfs)
+        if missing is not None or extra:
+            what = f"missing MF{missing}" if missing else f"MF{extra[0]} beyond NumMFs={n_mfs}"
+            where = found[f"MF{extra[0]}"][0] if extra and missing is None else line
             self.fail(where, f"[{self.label(sec)}] NumMFs={n_mfs}: {what}")
         out = []
         for _, key in mf_keys:
