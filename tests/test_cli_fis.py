@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from firefleet.cli import main
 from firefleet.control.fuzzy import evaluate, read_fis
@@ -172,4 +174,27 @@ def test_fis_eval_unreadable_input_exits_2(
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1, err
     assert err[0].startswith(f"firefleet: error: --eval {src}: {message}"), err[0]
+    assert not dest.exists()
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(data=st.binary(max_size=200), as_csv=st.booleans())
+def test_fis_random_bytes_exit_2_with_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], data: bytes, as_csv: bool
+) -> None:
+    """Random bytes as the .fis file or as the --eval table: one line, exit 2."""
+    bad = tmp_path / ("in.csv" if as_csv else "r.fis")
+    bad.write_bytes(data)
+    dest = tmp_path / "out.csv"
+    fis = FIS if as_csv else bad
+    capsys.readouterr()
+    code = main(["fis", str(fis), "--eval", str(bad if as_csv else FIS), "--out", str(dest)])
+    err = capsys.readouterr().err
+    if as_csv and code == 0:  # random bytes can be a valid table only by chance
+        return
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
     assert not dest.exists()
