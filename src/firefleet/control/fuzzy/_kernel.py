@@ -235,17 +235,25 @@ def eval_one(
 
 
 class PackedTables(NamedTuple):
-    """:class:`FisTables` in two flat buffers (see :func:`pack`).
+    """:class:`FisTables` in two 2-D buffers (see :func:`pack`), tables as row blocks.
 
     Attributes
     ----------
-    floats : ndarray, shape (4 M + 2 n_in + R + K (n_in + 1) + n_out,)
-        ``mf_params``, ``in_range``, ``rule_weight``, ``out_coef``, ``out_mid``.
-    ints : ndarray of int, shape (6 + 2 M + R (2 n_in + 1 + n_out) + 3,)
-        ``n_in, M, R, n_out, K, work size``, then ``mf_kind``, ``mf_input``,
-        ``rule_mf``, ``rule_not``, ``rule_or``, ``rule_out``, ``flags``.
+    floats : ndarray, shape (2 + M + n_in + K, W)
+        Row 0 ``rule_weight``, row 1 ``out_mid``, then the rows of ``mf_params``,
+        ``in_range`` and ``out_coef``, each from column 0, padded with zeros.
+    ints : ndarray of int, shape (5 + 3 R, W)
+        Row 0 ``n_in, M, R, n_out, K, work size``; rows 1-4 ``mf_kind``,
+        ``mf_input``, ``rule_or``, ``flags``; then the rows of ``rule_mf``,
+        ``rule_not`` and ``rule_out``.
     n_in, n_out : int
         Inputs and outputs.
+
+    Notes
+    -----
+    Row blocks make every table a basic slice of its buffer (``ints[5:5 + R, :n_in]``),
+    which the compiled side takes almost for free; a ``reshape`` per table cost more
+    than the evaluation itself.
     """
 
     floats: FloatArray
@@ -255,7 +263,7 @@ class PackedTables(NamedTuple):
 
 
 def pack(t: FisTables) -> PackedTables:
-    """Pack :class:`FisTables` into two buffers (the compiled side unpacks views).
+    """Pack :class:`FisTables` into two buffers (the compiled side takes views).
 
     Membership functions no rule uses are left out (their degrees would never be
     read), so the packed evaluation gives the same bits with less work.
@@ -272,72 +280,45 @@ def pack(t: FisTables) -> PackedTables:
     n_in = t.in_range.shape[0]
     n_out = t.out_mid.shape[0]
     n_mf = t.mf_kind.shape[0]
-    head = [n_in, n_mf, t.rule_mf.shape[0], n_out, t.out_coef.shape[0], n_in + n_mf + 2 * n_out]
-    ints = np.concatenate(
-        [
-            np.array(head, dtype=np.int64),
-            t.mf_kind,
-            t.mf_input,
-            t.rule_mf.ravel(),
-            t.rule_not.ravel().astype(np.int64),
-            t.rule_or.astype(np.int64),
-            t.rule_out.ravel(),
-            t.flags,
-        ]
-    ).astype(np.int64)
-    floats = np.concatenate(
-        [
-            t.mf_params.ravel(),
-            t.in_range.ravel(),
-            t.rule_weight,
-            t.out_coef.ravel(),
-            t.out_mid,
-        ]
-    ).astype(np.float64)
+    n_r = t.rule_mf.shape[0]
+    n_k = t.out_coef.shape[0]
+    width = max(6, 4, n_in + 1, n_out, n_mf, n_r)
+    ints = np.zeros((5 + 3 * n_r, width), dtype=np.int64)
+    ints[0, :6] = [n_in, n_mf, n_r, n_out, n_k, n_in + n_mf + 2 * n_out]
+    ints[1, :n_mf] = t.mf_kind
+    ints[2, :n_mf] = t.mf_input
+    ints[3, :n_r] = t.rule_or
+    ints[4, :3] = t.flags
+    ints[5 : 5 + n_r, :n_in] = t.rule_mf
+    ints[5 + n_r : 5 + 2 * n_r, :n_in] = t.rule_not
+    ints[5 + 2 * n_r : 5 + 3 * n_r, :n_out] = t.rule_out
+    floats = np.zeros((2 + n_mf + n_in + n_k, width))
+    floats[0, :n_r] = t.rule_weight
+    floats[1, :n_out] = t.out_mid
+    floats[2 : 2 + n_mf, :4] = t.mf_params
+    floats[2 + n_mf : 2 + n_mf + n_in, :2] = t.in_range
+    floats[2 + n_mf + n_in :, : n_in + 1] = t.out_coef
     return PackedTables(floats, ints, n_in, n_out)
 
 
 @numba.njit(cache=True, inline="always")
 def _unpack(fb: FloatArray, ib: IntArray) -> tuple[Any, ...]:  # pragma: no cover - jit
-    """The :class:`FisTables` fields as views of the packed buffers (no copies)."""
-    n_in, n_mf, n_r, n_out, n_k = ib[0], ib[1], ib[2], ib[3], ib[4]
-    o = 6
-    mf_kind = ib[o : o + n_mf]
-    o += n_mf
-    mf_input = ib[o : o + n_mf]
-    o += n_mf
-    rule_mf = ib[o : o + n_r * n_in].reshape((n_r, n_in))
-    o += n_r * n_in
-    rule_not = ib[o : o + n_r * n_in].reshape((n_r, n_in))
-    o += n_r * n_in
-    rule_or = ib[o : o + n_r]
-    o += n_r
-    rule_out = ib[o : o + n_r * n_out].reshape((n_r, n_out))
-    o += n_r * n_out
-    flags = ib[o : o + 3]
-    f = 0
-    mf_params = fb[f : f + 4 * n_mf].reshape((n_mf, 4))
-    f += 4 * n_mf
-    in_range = fb[f : f + 2 * n_in].reshape((n_in, 2))
-    f += 2 * n_in
-    rule_weight = fb[f : f + n_r]
-    f += n_r
-    out_coef = fb[f : f + n_k * (n_in + 1)].reshape((n_k, n_in + 1))
-    f += n_k * (n_in + 1)
-    out_mid = fb[f : f + n_out]
+    """The :class:`FisTables` fields as views of the packed buffers (basic slices)."""
+    n_in, n_mf, n_r, n_out = ib[0, 0], ib[0, 1], ib[0, 2], ib[0, 3]
+    m0 = 2 + n_mf
     return (
-        mf_kind,
-        mf_params,
-        mf_input,
-        in_range,
-        rule_mf,
-        rule_not,
-        rule_weight,
-        rule_or,
-        rule_out,
-        out_coef,
-        out_mid,
-        flags,
+        ib[1, :n_mf],  # mf_kind
+        fb[2:m0, :4],  # mf_params
+        ib[2, :n_mf],  # mf_input
+        fb[m0 : m0 + n_in, :2],  # in_range
+        ib[5 : 5 + n_r, :n_in],  # rule_mf
+        ib[5 + n_r : 5 + 2 * n_r, :n_in],  # rule_not
+        fb[0, :n_r],  # rule_weight
+        ib[3, :n_r],  # rule_or
+        ib[5 + 2 * n_r : 5 + 3 * n_r, :n_out],  # rule_out
+        fb[m0 + n_in :, : n_in + 1],  # out_coef
+        fb[1, :n_out],  # out_mid
+        ib[4, :3],  # flags
     )
 
 
@@ -348,7 +329,7 @@ def eval_packed(x: FloatArray, fb: FloatArray, ib: IntArray, out: FloatArray) ->
     for i in range(x.shape[0]):  # pragma: no cover - jit
         if not math.isfinite(x[i]):
             return False
-    work = np.empty(ib[5])
+    work = np.empty(ib[0, 5])
     kind, par, inp, rng, rmf, rnot, rw, ror, rout, coef, mid, flags = _unpack(fb, ib)
     eval_one(x, kind, par, inp, rng, rmf, rnot, rw, ror, rout, coef, mid, flags, out, work)
     return True
@@ -365,7 +346,7 @@ def eval_rows(x: FloatArray, fb: FloatArray, ib: IntArray, out: FloatArray) -> i
         for i in range(x.shape[1]):
             if not math.isfinite(x[k, i]):
                 return k
-    work = np.empty(ib[5])
+    work = np.empty(ib[0, 5])
     row = np.empty(x.shape[1])
     y = np.empty(out.shape[1])
     kind, par, inp, rng, rmf, rnot, rw, ror, rout, coef, mid, flags = _unpack(fb, ib)
