@@ -10,8 +10,9 @@ Per sample and per output ``j`` (MATLAB's ``evalfis`` for a Sugeno system)::
 
 Both the one-sample call and the batch run the same compiled function
 (:func:`firefleet.control.fuzzy._kernel.eval_one`) on tables flattened once and
-cached on the frozen system, so a single robot's call costs a few microseconds and a
-batch is one compiled loop; the simulator's team loop inlines the same function.
+cached on the frozen system, so a single robot's call costs about a microsecond (the
+bench controller: 11 rules, 4 inputs) and a batch is one compiled loop (about 0.3 us a
+sample); the simulator's team loop inlines the same function.
 """
 
 from __future__ import annotations
