@@ -15,7 +15,7 @@ staged loop of :mod:`firefleet.sim.loop` with the decision of
 
 At three robots the per-call overhead of NumPy would dominate (some 150 calls a tick),
 and at a thousand the compiled loop is still faster than whole-team array calls.
-tests/sim/test_kinds_path_following.py shows the kernel equals the staged loop built
+tests/sim/test_loop.py shows the kernel equals the staged loop built
 from the public functions, step by step.
 """
 
