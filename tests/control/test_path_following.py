@@ -91,4 +91,6 @@ def test_arrival_once_the_last_point_is_out_and_the_robot_is_past_the_end() -> N
     short = np.array([[4.99, 0.0, 0.0], [0.0, 2.9, 0.0]])
     np.testing.assert_array_equal(arrival(before, short, end, 60, 50), [False, False])
     # once arrived, a robot stays arrived
-    np.testing.assert_array_equal(arrival(np.array([True, False]), short, end, 60, 50), [True, False])
+    np.testing.assert_array_equal(
+        arrival(np.array([True, False]), short, end, 60, 50), [True, False]
+    )

@@ -48,10 +48,12 @@ def test_past_the_end_the_point_moves_on_along_the_end_tangent_at_the_same_pace(
     assert traj.spacing_m is not None
     step = float(traj.spacing_m[0])
     assert step == pytest.approx(2.0 * np.sqrt(2.0) / 4, abs=1e-12)  # arc length / pieces
-    assert traj.release_index(7.0) == 4 and traj.index(7.0) == 4
+    assert traj.release_index(7.0) == 4
+    assert traj.index(7.0) == 4
     np.testing.assert_allclose(traj.desired(7.0)[0], [2.0, 2.0, np.pi / 4], atol=1e-12)
     # 8 s: index 5, one spacing beyond the end; 11 s: index 6, two
-    assert traj.release_index(8.0) == 5 and traj.index(8.0) == 4
+    assert traj.release_index(8.0) == 5
+    assert traj.index(8.0) == 4
     for t, beyond in ((8.0, 1), (11.0, 2)):
         along = 2.0 + beyond * step / np.sqrt(2.0)
         np.testing.assert_allclose(traj.desired(t)[0], [along, along, np.pi / 4], atol=1e-12)

@@ -151,7 +151,8 @@ def test_stage_order_odometry_link_and_recording() -> None:
     result = run_loop(scn, decider, np.array([0, 7, scn.n_steps]))
     assert len(seen) == scn.n_steps + 1
     np.testing.assert_array_equal(result.extra["t_echo_s"][:, 0], [0.0, 7 * scn.dt_s, 0.2])
-    assert seen[0][2] == {} and seen[5][2]["t_s"][0] == seen[4][0]
+    assert seen[0][2] == {}
+    assert seen[5][2]["t_s"][0] == seen[4][0]
     # the reference: the wheel stack alone, with its own odometry, the same references
     rng = np.random.default_rng(scn.seed)
     stack = discretise_drive(scn.robot, scn.motor, scn.speed_pid, scn.encoder, scn.dt_s)
@@ -170,7 +171,9 @@ def test_stage_order_odometry_link_and_recording() -> None:
 
 
 def test_a_kind_without_estimate_sees_none() -> None:
-    scn = dataclasses.replace(load_scenario("motor-pid"), duration_s=0.05, poses=((0.0, 0.0, 0.0),) * 2)
+    scn = dataclasses.replace(
+        load_scenario("motor-pid"), duration_s=0.05, poses=((0.0, 0.0, 0.0),) * 2
+    )
     seen: list[Any] = []
 
     def init(scenario: Scenario) -> tuple[list[Any], None]:

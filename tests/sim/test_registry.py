@@ -30,7 +30,8 @@ def test_every_command_kind_of_the_schema_is_a_registered_kind() -> None:
     for name in tags:
         kind = task_kind(name)
         assert kind.name == name
-        assert kind.metric_names and len(set(kind.metric_names)) == len(kind.metric_names)
+        assert kind.metric_names
+        assert len(set(kind.metric_names)) == len(kind.metric_names)
 
 
 def test_scenario_metric_names_come_from_the_kind() -> None:
@@ -40,7 +41,7 @@ def test_scenario_metric_names_come_from_the_kind() -> None:
 
 
 def test_unknown_kind_names_the_known_ones() -> None:
-    with pytest.raises(InputError, match="unknown kind 'swarm'.*path-following"):
+    with pytest.raises(InputError, match=r"unknown kind 'swarm'.*path-following"):
         task_kind("swarm")
 
 

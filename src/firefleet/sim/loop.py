@@ -183,11 +183,11 @@ class NoEstimation:
 class Estimation(Protocol):
     """A pose estimator of the loop."""
 
-    def init(self, pose: FloatArray, drive: DriveState) -> Any: ...  # noqa: D102
+    def init(self, pose: FloatArray, drive: DriveState) -> Any: ...
 
-    def step(self, state: Any, drive: DriveState, stack: DriveStack) -> Any: ...  # noqa: D102
+    def step(self, state: Any, drive: DriveState, stack: DriveStack) -> Any: ...
 
-    def pose(self, state: Any) -> FloatArray | None: ...  # noqa: D102
+    def pose(self, state: Any) -> FloatArray | None: ...
 
 
 @dataclass(frozen=True)
@@ -368,7 +368,9 @@ def run_loop(
 
     stg = stages if stages is not None else default_stages(scenario, decider)
     dt = scenario.dt_s
-    stack = discretise_drive(scenario.robot, scenario.motor, scenario.speed_pid, scenario.encoder, dt)
+    stack = discretise_drive(
+        scenario.robot, scenario.motor, scenario.speed_pid, scenario.encoder, dt
+    )
     drive = drive_init(scenario.initial_poses, phase, stack)
     world = stg.world.init(n)
     estimate = stg.estimation.init(scenario.initial_poses, drive)

@@ -81,7 +81,9 @@ def speed_decide(
     state: None, inputs: DecideInputs, params: StepParams, dt_s: float
 ) -> tuple[None, WheelCommand]:
     """Closed loop: every wheel's speed reference is the step's level."""
-    return state, WheelCommand(reference_rad_s=np.full((params.n_robots, 2), params.level(inputs.t_s)))
+    return state, WheelCommand(
+        reference_rad_s=np.full((params.n_robots, 2), params.level(inputs.t_s))
+    )
 
 
 def voltage_step_metrics(result: SimResult) -> Metrics:
@@ -165,7 +167,12 @@ def _speed_figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
 KINDS = (
     TaskKind(
         name="voltage-step",
-        metric_names=("steady_speed_rad_s", "steady_current_a", "peak_current_a", "time_constant_s"),
+        metric_names=(
+            "steady_speed_rad_s",
+            "steady_current_a",
+            "peak_current_a",
+            "time_constant_s",
+        ),
         metrics=voltage_step_metrics,
         figures=_voltage_figures,
         decider=Decider(init=_voltage_init, decide=voltage_decide),

@@ -160,9 +160,7 @@ def path_following_decide(
         "lambda_rad": lam,
         "desired_index": np.full(pose.shape[0], float(j)),
     }
-    command = WheelCommand(
-        reference_rad_s=body_to_wheels(v, omega, params.geometry), series=series
-    )
+    command = WheelCommand(reference_rad_s=body_to_wheels(v, omega, params.geometry), series=series)
     return arrived, command
 
 
@@ -196,7 +194,15 @@ def _start(scenario: Scenario, phase: FloatArray, rec_steps: NDArray[np.int64]) 
     motor = np.r_[disc.ad.ravel(), disc.bd.ravel(), disc.c_ad, disc.c_bd]
     g = scenario.speed_pid
     pid = np.array(
-        [g.kp, g.ki, g.kd, g.derivative_filter_s, g.setpoint_weight, g.tracking_time_s, g.output_limit]
+        [
+            g.kp,
+            g.ki,
+            g.kd,
+            g.derivative_filter_s,
+            g.setpoint_weight,
+            g.tracking_time_s,
+            g.output_limit,
+        ]
     )
     geom = np.array([scenario.robot.wheel_radius_m, scenario.robot.axle_length_m])
     load = np.array([scenario.load.torque_n_m, scenario.load.start_s])
@@ -244,9 +250,7 @@ def _start(scenario: Scenario, phase: FloatArray, rec_steps: NDArray[np.int64]) 
         ctl_rec,
         desired_rec,
     )
-    return _Buffers(
-        scenario, rec_steps, args, pose_rec, odom_rec, wheel_rec, ctl_rec, desired_rec
-    )
+    return _Buffers(scenario, rec_steps, args, pose_rec, odom_rec, wheel_rec, ctl_rec, desired_rec)
 
 
 def _kernel_chunk(buffers: _Buffers, k0: int, k1: int) -> None:
