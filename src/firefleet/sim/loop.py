@@ -60,12 +60,15 @@ __all__ = [
     "NoSensors",
     "Odometry",
     "ProgressCallback",
+    "Recording",
     "Stages",
     "StaticWorld",
+    "TruePose",
     "WheelCommand",
     "WorldState",
     "default_stages",
     "run_loop",
+    "run_staged",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -126,6 +129,21 @@ class NoSensors:
     def read(self, world: WorldState, drive: DriveState) -> Messages:
         """Readings by name: none."""
         return {}
+
+
+@dataclass(frozen=True)
+class TruePose:
+    """A ground-truth pose sensor (motion capture): reading ``"pose"`` (N, 3), the true poses."""
+
+    def read(self, world: WorldState, drive: DriveState) -> Messages:
+        """Readings by name: ``{"pose": true poses}``."""
+        return {"pose": drive.pose}
+
+
+class Sensors(Protocol):
+    """The sensors of the loop: readings by name from the world and the true state."""
+
+    def read(self, world: WorldState, drive: DriveState) -> Messages: ...
 
 
 @dataclass(frozen=True)
@@ -195,7 +213,7 @@ class Stages:
     """The loop's stages before the decision, by name (see the module notes)."""
 
     world: StaticWorld
-    sensors: NoSensors = field(default_factory=NoSensors)
+    sensors: Sensors = field(default_factory=NoSensors)
     link: IdealLink = field(default_factory=IdealLink)
     estimation: Estimation = field(default_factory=Odometry)
 
@@ -367,26 +385,111 @@ def run_loop(
         return fused.finish(buffers)
 
     stg = stages if stages is not None else default_stages(scenario, decider)
-    dt = scenario.dt_s
     stack = discretise_drive(
-        scenario.robot, scenario.motor, scenario.speed_pid, scenario.encoder, dt
+        scenario.robot, scenario.motor, scenario.speed_pid, scenario.encoder, scenario.dt_s
     )
     drive = drive_init(scenario.initial_poses, phase, stack)
-    world = stg.world.init(n)
-    estimate = stg.estimation.init(scenario.initial_poses, drive)
     state, params = decider.init(scenario)
+    rec = run_staged(
+        drive, stack, stg, decider.decide, state, params, rec_steps, n_steps, progress=progress
+    )
+    return SimResult(
+        scenario=scenario,
+        t=rec.t_s,
+        pose=rec.pose,
+        wheel_speed_rad_s=rec.wheel_speed_rad_s,
+        wheel_speed_measured_rad_s=rec.wheel_speed_measured_rad_s,
+        wheel_speed_ref_rad_s=rec.wheel_speed_ref_rad_s,
+        current_a=rec.current_a,
+        voltage_v=rec.voltage_v,
+        load_torque_n_m=rec.load_torque_n_m,
+        extra={name: rec.series[name] for name in decider.series},
+    )
+
+
+@dataclass(frozen=True)
+class Recording:
+    """The samples of a staged run (T recorded ticks, N robots).
+
+    Attributes
+    ----------
+    t_s : ndarray, shape (T,)
+        Time [s].
+    pose : ndarray, shape (T, N, 3)
+        True poses.
+    wheel_speed_rad_s, wheel_speed_measured_rad_s, wheel_speed_ref_rad_s, current_a, \
+voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
+        The wheel stack's quantities (as :class:`~firefleet.sim.result.SimResult`).
+    series : dict of str to ndarray
+        The decision's series by name, time first.
+    """
+
+    t_s: FloatArray
+    pose: FloatArray
+    wheel_speed_rad_s: FloatArray
+    wheel_speed_measured_rad_s: FloatArray
+    wheel_speed_ref_rad_s: FloatArray
+    current_a: FloatArray
+    voltage_v: FloatArray
+    load_torque_n_m: FloatArray
+    series: dict[str, FloatArray]
+
+
+def run_staged(
+    drive: DriveState,
+    stack: DriveStack,
+    stages: Stages,
+    decide: DecideStep,
+    state: Any,
+    params: Any,
+    rec_steps: NDArray[np.int64],
+    n_steps: int,
+    *,
+    progress: ProgressCallback | None = None,
+    rng: np.random.Generator | None = None,
+) -> Recording:
+    """The staged loop: ticks 0 .. ``n_steps``, each stage a function on arrays.
+
+    Parameters
+    ----------
+    drive : DriveState
+        The team's wheel stacks at the start (N robots).
+    stack : DriveStack
+        Their constants (the control period ``stack.dt_s`` is the tick).
+    stages : Stages
+    decide : callable
+        ``new_state, command = decide(state, inputs, params, dt_s)``.
+    state, params
+        The decision's memory at the start, and its constants.
+    rec_steps : ndarray of int
+        Ticks to record, ascending (at most ``n_steps``).
+    n_steps : int
+        Number of drive steps (the last tick, ``n_steps``, decides and records only).
+    progress : callable, optional
+        ``progress(done, total)`` after each chunk of ticks.
+    rng : numpy.random.Generator, optional
+        Draws the wheels' slip in each drive step (:func:`drive_step`); None: no slip.
+
+    Returns
+    -------
+    Recording
+    """
+    dt = stack.dt_s
+    n = drive.pose.shape[0]
+    world = stages.world.init(n)
+    estimate = stages.estimation.init(drive.pose, drive)
     sent: Messages = {}
     rec = _Recorder(rec_steps, n)
-    for k0, k1 in itertools.pairwise(bounds):
+    for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         for k in range(int(k0), int(k1)):
             t = k * dt
-            world = stg.world.step(world, t)
-            readings = stg.sensors.read(world, drive)
-            inbox = stg.link.exchange(sent)
+            world = stages.world.step(world, t)
+            readings = stages.sensors.read(world, drive)
+            inbox = stages.link.exchange(sent)
             if k > 0:  # the encoders have counted since the last tick
-                estimate = stg.estimation.step(estimate, drive, stack)
-            inputs = DecideInputs(t, k, stg.estimation.pose(estimate), readings, inbox)
-            state, command = decider.decide(state, inputs, params, dt)
+                estimate = stages.estimation.step(estimate, drive, stack)
+            inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
+            state, command = decide(state, inputs, params, dt)
             sent = command.outbox
             if command.voltage_v is None:
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
@@ -395,10 +498,12 @@ def run_loop(
             rec.record(k, drive, command, voltage, world)
             if k == n_steps:
                 break
-            drive = drive_step(drive, voltage, stack, load_torque_n_m=world.load_torque_n_m)
+            drive = drive_step(
+                drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
+            )
         if progress is not None:
             progress(min(int(k1), n_steps), n_steps)
-    return rec.result(scenario, decider.series)
+    return rec.recording(dt)
 
 
 class _Recorder:
@@ -439,10 +544,9 @@ class _Recorder:
             self.series[name][row] = value
         self.row += 1
 
-    def result(self, scenario: Scenario, series: tuple[str, ...]) -> SimResult:
-        return SimResult(
-            scenario=scenario,
-            t=np.asarray(self.rec_steps * scenario.dt_s, dtype=np.float64),
+    def recording(self, dt_s: float) -> Recording:
+        return Recording(
+            t_s=np.asarray(self.rec_steps * dt_s, dtype=np.float64),
             pose=self.pose,
             wheel_speed_rad_s=self.wheel["speed"],
             wheel_speed_measured_rad_s=self.wheel["measured"],
@@ -450,5 +554,5 @@ class _Recorder:
             current_a=self.wheel["current"],
             voltage_v=self.wheel["voltage"],
             load_torque_n_m=self.wheel["load"],
-            extra={name: self.series[name] for name in series},
+            series=self.series,
         )
