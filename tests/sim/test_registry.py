@@ -66,3 +66,18 @@ def test_register_adds_a_kind_and_refuses_a_taken_name(monkeypatch: pytest.Monke
 def test_a_kind_has_a_decider_or_a_runner() -> None:
     with pytest.raises(InputError, match="decider or a runner"):
         TaskKind("x", ("x_m",), _no_metrics, _no_figures)
+
+
+def test_looking_kinds_up_does_not_import_matplotlib() -> None:
+    # the figures functions import their report code only when called
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, firefleet\n"
+        "from firefleet.sim.registry import kind_names, task_kind\n"
+        "[task_kind(k).figures for k in kind_names()]\n"
+        "print('matplotlib' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
