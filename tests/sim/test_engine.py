@@ -68,6 +68,8 @@ def test_bad_engine_arguments() -> None:
         simulate(scn, record_every=0)
     with pytest.raises(InputError, match="seed"):
         simulate(scn, seed=-1)
+    with pytest.raises(InputError, match="backend"):
+        simulate(scn, backend="scalar")  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("name", builtin_names())

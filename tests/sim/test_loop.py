@@ -184,3 +184,24 @@ def test_a_kind_without_estimate_sees_none() -> None:
     run_loop(scn, decider, np.array([scn.n_steps]), stages=stages)
     assert all(s[1] is None for s in seen)
     assert stages.names()["estimation"] == "NoEstimation"
+
+
+def test_backend_array_runs_the_staged_loop(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the same run as the fused one, to the tolerance above, through the public entry point
+    from firefleet import simulate
+    from firefleet.sim import loop
+
+    calls: list[int] = []
+    staged_run = loop.run_staged
+
+    def counted(*args: Any, **kwargs: Any) -> loop.Recording:
+        calls.append(1)
+        return staged_run(*args, **kwargs)
+
+    monkeypatch.setattr(loop, "run_staged", counted)
+    scn = _short(load_scenario("path-curved-off"), 600)
+    fused = simulate(scn).arrays()
+    assert not calls  # the compiled loop
+    staged = simulate(scn, backend="array").arrays()
+    assert calls == [1]
+    _assert_close(fused, staged)

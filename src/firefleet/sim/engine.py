@@ -13,6 +13,7 @@ bit for bit.
 from __future__ import annotations
 
 import dataclasses
+from typing import Literal
 
 import numpy as np
 
@@ -31,6 +32,7 @@ def simulate(
     seed: int | None = None,
     record_every: int = 1,
     progress: ProgressCallback | None = None,
+    backend: Literal["auto", "array"] = "auto",
 ) -> SimResult:
     """Run a scenario.
 
@@ -44,6 +46,10 @@ def simulate(
         Record every k-th step (and the last); 1 records them all.
     progress : callable, optional
         ``progress(done, total)``, for a progress bar.
+    backend : {"auto", "array"}
+        ``"auto"``: the kind's compiled loop where it has one (for the default stages);
+        ``"array"``: the staged loop, each stage a NumPy function on the team's arrays
+        (the reference the compiled loops are tested against).
 
     Returns
     -------
@@ -63,6 +69,11 @@ def simulate(
         scenario = dataclasses.replace(scenario, seed=seed)
     if record_every < 1:
         raise InputError(f"record_every must be >= 1, got {record_every}")
+    if backend not in ("auto", "array"):
+        raise InputError(f"backend must be 'auto' or 'array', got {backend!r}")
     n_steps = scenario.n_steps
-    rec_steps = np.unique(np.r_[np.arange(0, n_steps + 1, record_every), n_steps])
-    return task_kind(scenario.command.kind).run(scenario, rec_steps, progress)
+    rec_steps = np.arange(0, n_steps + 1, record_every)
+    if rec_steps[-1] != n_steps:  # the last step is always recorded
+        rec_steps = np.r_[rec_steps, n_steps]
+    kind = task_kind(scenario.command.kind)
+    return kind.run(scenario, rec_steps, progress, staged=backend == "array")

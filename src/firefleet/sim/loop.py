@@ -20,11 +20,12 @@ decided at ``t``; the last tick records and stops. Randomness (each wheel's enco
 phase) comes from one ``numpy.random.Generator`` seeded with the scenario's ``seed``.
 
 A Python loop per tick costs some 100 us of NumPy overhead, far too slow for the long
-runs of small teams. So the loop runs in chunks of ticks, and a kind may bring a
-*fused* chunk function: one compiled loop that performs the same stage sequence for
-the default stages (static world, no sensors, ideal link, odometry). :func:`run_loop`
-takes it whenever the stages are the defaults; the staged path, each stage a function
-on arrays, is the reference (the tests show the two agree).
+runs of small teams. So a kind may bring a *fused* run (:data:`FusedRun`): one compiled
+loop, run in chunks of ticks, that performs the same stage sequence for the default
+stages (static world, no sensors, ideal link, odometry). :func:`run_loop` takes it
+whenever the stages are the defaults; the staged path, each stage a function on arrays
+and the ticks in chunks of Python, is the reference (tests/sim/test_loop.py shows the
+two agree).
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ __all__ = [
     "CHUNKS",
     "DecideInputs",
     "Decider",
-    "FusedChunks",
+    "FusedRun",
     "IdealLink",
     "NoEstimation",
     "NoSensors",
@@ -66,6 +67,7 @@ __all__ = [
     "TruePose",
     "WheelCommand",
     "WorldState",
+    "chunk_bounds",
     "default_stages",
     "run_loop",
     "run_staged",
@@ -308,23 +310,10 @@ class Decider:
     uses_estimate: bool = False
 
 
-@dataclass(frozen=True)
-class FusedChunks:
-    """A compiled loop doing the default stages' tick sequence, in chunks of ticks.
-
-    Attributes
-    ----------
-    start : callable
-        ``buffers = start(scenario, encoder_phase_rad, rec_steps)``.
-    chunk : callable
-        ``chunk(buffers, k0, k1)`` runs ticks ``k0 .. k1 - 1`` in place.
-    finish : callable
-        ``result = finish(buffers)``.
-    """
-
-    start: Callable[[Scenario, FloatArray, NDArray[np.int64]], Any]
-    chunk: Callable[[Any, int, int], None]
-    finish: Callable[[Any], SimResult]
+FusedRun = Callable[[Scenario, FloatArray, NDArray[np.int64], "ProgressCallback | None"], SimResult]
+"""``result = fused(scenario, encoder_phase_rad, rec_steps, progress)``: a kind's compiled
+loop for the default stages, from the encoders' phases (N, 2) [rad] the loop drew, the
+ticks to record, and a progress callback to call between its chunks of ticks."""
 
 
 def default_stages(scenario: Scenario, decider: Decider) -> Stages:
@@ -346,7 +335,7 @@ def run_loop(
     decider: Decider,
     rec_steps: NDArray[np.int64],
     *,
-    fused: FusedChunks | None = None,
+    fused: FusedRun | None = None,
     stages: Stages | None = None,
     progress: ProgressCallback | None = None,
 ) -> SimResult:
@@ -359,8 +348,9 @@ def run_loop(
         The task kind's decision.
     rec_steps : ndarray of int
         Ticks to record (ascending, the last one ``n_steps`` included).
-    fused : FusedChunks, optional
-        The kind's compiled loop, taken when ``stages`` is None (the defaults).
+    fused : callable, optional
+        The kind's compiled loop (:data:`FusedRun`), taken when ``stages`` is None (the
+        defaults).
     stages : Stages, optional
         The stages; None: :func:`default_stages`.
     progress : callable, optional
@@ -375,14 +365,8 @@ def run_loop(
     n = scenario.n_robots
     n_steps = scenario.n_steps
     phase = encoder_phase(scenario.encoder, n, rng)
-    bounds = chunk_bounds(n_steps)
     if fused is not None and stages is None:
-        buffers = fused.start(scenario, phase, rec_steps)
-        for k0, k1 in itertools.pairwise(bounds):
-            fused.chunk(buffers, int(k0), int(k1))
-            if progress is not None:
-                progress(min(int(k1), n_steps), n_steps)
-        return fused.finish(buffers)
+        return fused(scenario, phase, rec_steps, progress)
 
     stg = stages if stages is not None else default_stages(scenario, decider)
     stack = discretise_drive(

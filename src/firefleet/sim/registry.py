@@ -36,7 +36,7 @@ from firefleet.errors import InputError
 
 if TYPE_CHECKING:
     from firefleet.scenarios.schema import Scenario
-    from firefleet.sim.loop import Decider, FusedChunks, ProgressCallback
+    from firefleet.sim.loop import Decider, FusedRun, ProgressCallback
     from firefleet.sim.result import SimResult
 
 __all__ = ["Metrics", "TaskKind", "kind_names", "register", "task_kind"]
@@ -65,8 +65,8 @@ class TaskKind:
         (from :mod:`firefleet.report`) only when called.
     decider : Decider, optional
         The kind's decision on the world loop (:class:`firefleet.sim.loop.Decider`).
-    fused : FusedChunks, optional
-        A compiled loop for the default stages (:class:`firefleet.sim.loop.FusedChunks`).
+    fused : callable, optional
+        A compiled loop for the default stages (:data:`firefleet.sim.loop.FusedRun`).
     runner : callable, optional
         For a kind that runs its own loop instead of a ``decider`` (exactly one of the
         two): ``runner(scenario, rec_steps, progress) -> SimResult``.
@@ -77,7 +77,7 @@ class TaskKind:
     metrics: Callable[[SimResult], Metrics]
     figures: Callable[[SimResult, Metrics], dict[str, bytes]]
     decider: Decider | None = None
-    fused: FusedChunks | None = None
+    fused: FusedRun | None = None
     runner: Runner | None = None
 
     def __post_init__(self) -> None:
@@ -91,14 +91,23 @@ class TaskKind:
         scenario: Scenario,
         rec_steps: NDArray[np.int64],
         progress: ProgressCallback | None = None,
+        *,
+        staged: bool = False,
     ) -> SimResult:
-        """Run ``scenario`` (whose command is of this kind), recording ``rec_steps``."""
+        """Run ``scenario`` (whose command is of this kind), recording ``rec_steps``.
+
+        ``staged``: run the world loop stage by stage even where the kind has a fused
+        loop (a kind with its own ``runner`` ignores it).
+        """
         if self.runner is not None:
             return self.runner(scenario, rec_steps, progress)
-        from firefleet.sim.loop import run_loop
+        from firefleet.sim.loop import default_stages, run_loop
 
         assert self.decider is not None  # __post_init__
-        return run_loop(scenario, self.decider, rec_steps, fused=self.fused, progress=progress)
+        stages = default_stages(scenario, self.decider) if staged else None
+        return run_loop(
+            scenario, self.decider, rec_steps, fused=self.fused, stages=stages, progress=progress
+        )
 
 
 @functools.cache

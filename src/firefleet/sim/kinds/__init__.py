@@ -14,7 +14,7 @@ To add a kind (say ``navigate``):
    returns wheel references and the series to record), the metric names and the metrics
    function, and a figures function that imports its matplotlib code from
    :mod:`firefleet.report` when called; optionally a compiled chunk for the default
-   stages (:class:`firefleet.sim.loop.FusedChunks`), shown equal to the staged loop by
+   stages (:data:`firefleet.sim.loop.FusedRun`), shown equal to the staged loop by
    ``tests/sim/test_loop.py``;
 3. ``KINDS = (TaskKind(name="navigate", ...),)`` at the end of the module;
 4. its scenarios in ``scenarios/builtin/``.

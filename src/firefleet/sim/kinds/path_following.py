@@ -19,6 +19,7 @@ schedule, so a team run equals its robots run one by one.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -37,7 +38,7 @@ from firefleet.models.motor import discretise_motor
 from firefleet.planning.trajectory import Trajectory
 from firefleet.scenarios.schema import PathFollowing, Scenario
 from firefleet.sim.kinds._path_following_kernel import run_chunk, run_chunk_parallel
-from firefleet.sim.loop import DecideInputs, Decider, FusedChunks, WheelCommand
+from firefleet.sim.loop import DecideInputs, Decider, ProgressCallback, WheelCommand, chunk_bounds
 from firefleet.sim.registry import Metrics, TaskKind
 from firefleet.sim.result import SimResult
 
@@ -260,6 +261,22 @@ def _kernel_chunk(buffers: _Buffers, k0: int, k1: int) -> None:
     kernel(k0, k1, *buffers.args)
 
 
+def _fused_run(
+    scenario: Scenario,
+    phase: FloatArray,
+    rec_steps: NDArray[np.int64],
+    progress: ProgressCallback | None,
+) -> SimResult:
+    """The default stages' run, compiled: the kernel in chunks of ticks."""
+    buffers = _start(scenario, phase, rec_steps)
+    n_steps = scenario.n_steps
+    for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
+        _kernel_chunk(buffers, int(k0), int(k1))
+        if progress is not None:
+            progress(min(int(k1), n_steps), n_steps)
+    return _finish(buffers)
+
+
 def _finish(buffers: _Buffers) -> SimResult:
     wheel_rec, ctl_rec = buffers.wheel_rec, buffers.ctl_rec
     return SimResult(
@@ -405,7 +422,7 @@ KINDS = (
         decider=Decider(
             init=_init, decide=path_following_decide, series=SERIES, uses_estimate=True
         ),
-        fused=FusedChunks(start=_start, chunk=_kernel_chunk, finish=_finish),
+        fused=_fused_run,
     ),
 )
 """The path-following kind."""
