@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import Literal
 
 import numpy as np
 import pytest
@@ -26,16 +27,17 @@ def test_seed_changes_the_encoder_phase() -> None:
     assert not np.array_equal(a.wheel_speed_measured_rad_s, b.wheel_speed_measured_rad_s)
 
 
-def test_team_run_equals_single_robot_runs() -> None:
+@pytest.mark.parametrize("backend", ["auto", "array"])
+def test_team_run_equals_single_robot_runs(backend: Literal["auto", "array"]) -> None:
     # With an ideal encoder the run has no randomness, so a team of three must equal
     # three single-robot runs, robot by robot (batch-first arrays, no per-robot state mixing).
     base = dataclasses.replace(
         load_scenario("motor-pid"), encoder=EncoderParams(counts_per_rev=0), duration_s=1.0
     )
     poses = ((0.0, 0.0, 0.0), (1.0, -2.0, 30.0), (-3.0, 0.5, -120.0))
-    team = simulate(dataclasses.replace(base, poses=poses))
+    team = simulate(dataclasses.replace(base, poses=poses), backend=backend)
     for i, pose in enumerate(poses):
-        one = simulate(dataclasses.replace(base, poses=(pose,)))
+        one = simulate(dataclasses.replace(base, poses=(pose,)), backend=backend)
         for name, arr in one.arrays().items():
             if name == "t":
                 continue
@@ -69,7 +71,7 @@ def test_bad_engine_arguments() -> None:
     with pytest.raises(InputError, match="seed"):
         simulate(scn, seed=-1)
     with pytest.raises(InputError, match="backend"):
-        simulate(scn, backend="scalar")  # type: ignore[arg-type]
+        simulate(scn, backend="gpu")  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("name", builtin_names())
