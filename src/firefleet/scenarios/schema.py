@@ -325,48 +325,11 @@ class LoadStep:
     start_s: float = 0.0
 
 
-# The metrics each command kind produces (firefleet.sim.metrics computes them).
-METRICS: dict[str, tuple[str, ...]] = {
-    "voltage-step": (
-        "steady_speed_rad_s",
-        "steady_current_a",
-        "peak_current_a",
-        "time_constant_s",
-    ),
-    "wheel-speed-step": (
-        "rise_time_s",
-        "settling_time_s",
-        "overshoot_pct",
-        "steady_state_error_rad_s",
-        "disturbance_recovery_s",
-        "peak_current_a",
-        "max_voltage_v",
-    ),
-    "path-following": (
-        "path_lengths_m",
-        "wait_time_s",
-        "capture_time_s",
-        "cross_track_rms_m",
-        "cross_track_rms_after_capture_m",
-        "cross_track_max_after_capture_m",
-        "final_position_error_m",
-        "arrival_time_s",
-        "arrival_spread_s",
-        "mean_speed_m_s",
-        "longest_path_speed_margin_m_s",
-        "sync_distance_m",
-        "odometry_drift_m",
-        "peak_current_a",
-        "max_voltage_v",
-    ),
-    "formation": (
-        "radius_error_max_m",
-        "spacing_error_max_deg",
-        "min_clearance_m",
-        "radius_settling_time_s",
-        "final_radius_m",
-    ),
-}
+def _metric_names(kind: str) -> tuple[str, ...]:
+    """The metrics a command kind declares (its task kind, ``firefleet.sim.registry``)."""
+    from firefleet.sim.registry import task_kind  # lazy: the simulator imports this module
+
+    return task_kind(kind).metric_names
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
@@ -451,7 +414,7 @@ class Scenario:
                     f"command.trajectory_s ({self.command.trajectory_s} s) is longer than "
                     f"duration_s ({self.duration_s} s)"
                 )
-        known = METRICS[self.command.kind]
+        known = _metric_names(self.command.kind)
         for claim in self.claims:
             if claim.metric not in known:
                 raise InputError(
@@ -479,7 +442,7 @@ class Scenario:
     @property
     def metric_names(self) -> tuple[str, ...]:
         """The metrics this scenario's run produces."""
-        return METRICS[self.command.kind]
+        return _metric_names(self.command.kind)
 
 
 _ADAPTER = pydantic.TypeAdapter(Scenario)
