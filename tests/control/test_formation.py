@@ -141,11 +141,11 @@ def test_contact_and_obstacle_forces_by_hand() -> None:
 
 
 def test_regular_polygon_on_the_circle_is_an_equilibrium_of_the_regular_law() -> None:
-    params = FormationParams(alpha_m=3.0, spacing_gain=5.0)
+    params = FormationParams(alpha_m=3.0)
     c = np.array([2.0, 1.0])
     for n in (3, 4, 5, 8):
         f = formation_force(_polygon(n, 3.0, (2.0, 1.0)), c, params, law="regular")
-        # attraction 0 on the circle, tangential Coulomb 0 by symmetry, contact out of
+        # attraction 0 on the circle, equal angular gaps, contact out of
         # range (sides >= 2.3 m): rounding of forces of order 1 N
         np.testing.assert_allclose(f, 0.0, atol=1e-12)
 

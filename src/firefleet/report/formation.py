@@ -53,7 +53,7 @@ def _command(result: SimResult) -> Formation:
 
 def _arrays(result: SimResult) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
     points = np.asarray(result.extra["formation_xy_m"], dtype=np.float64)
-    leader = np.asarray(result.extra["leader_xy"], dtype=np.float64)
+    leader = np.asarray(result.extra["leader_xy_m"], dtype=np.float64)
     active = np.asarray(result.extra["robot_active"]) > 0.5
     return points, leader, active
 
@@ -71,7 +71,7 @@ def _scene(ax: Any, result: SimResult, cmd: Formation) -> None:
     plt = _pyplot()
     for o in cmd.obstacles:
         ax.add_patch(plt.Circle((o.x_m, o.y_m), o.radius_m, color="0.35", alpha=0.8, zorder=1))
-    leader = np.asarray(result.extra["leader_xy"])
+    leader = np.asarray(result.extra["leader_xy_m"])
     if np.ptp(leader, axis=0).max() > 0:
         ax.plot(leader[:, 0], leader[:, 1], "k--", lw=1, label="virtual leader's path")
     ax.set_aspect("equal")
