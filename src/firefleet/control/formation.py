@@ -88,6 +88,7 @@ __all__ = [
     "BLOCK_ELEMS",
     "FormationParams",
     "circle_attraction",
+    "contact_pairs",
     "contact_repulsion",
     "coulomb_repulsion",
     "formation_force",
@@ -442,17 +443,20 @@ def ring_spacing(
            [ 0.    , -1.5708]])
     """
     p = _positions(pos)
-    c = as_float_array(leader_xy, "leader_xy", (2,))
-    n = p.shape[0]
-    out = np.zeros_like(p)
-    d = p - c
-    r = np.sqrt((d * d).sum(axis=1))
-    use = r > 0
+    d = p - as_float_array(leader_xy, "leader_xy", (2,))
+    use = (d * d).sum(axis=1) > 0
     if active is not None:
         use &= np.asarray(active, dtype=bool).reshape(-1)
+    return _ring_spacing(d, use, stiffness_n_m)[0]
+
+
+def _ring_spacing(d: FloatArray, use: BoolArray, stiffness_n_m: float) -> tuple[FloatArray, float]:
+    """:func:`ring_spacing` from the offsets ``d = p - c`` (N, 2) of the robots ``use``
+    (not on the leader), and the largest ``|g+ - g-|`` [rad]."""
+    out = np.zeros_like(d)
     idx = np.flatnonzero(use)
-    if idx.size < 2 or stiffness_n_m == 0 or n < 2:
-        return out
+    if idx.size < 2 or stiffness_n_m == 0:
+        return out, 0.0
     theta = np.arctan2(d[idx, 1], d[idx, 0])
     order = np.argsort(theta, kind="stable")
     th = theta[order]
@@ -461,10 +465,11 @@ def ring_spacing(
     ahead[-1] = th[0] + 2.0 * math.pi - th[-1]
     behind = np.roll(ahead, 1)
     k = idx[order]
-    ft = (0.5 * stiffness_n_m) * (ahead - behind)  # per unit radius [N/m]
+    diff = ahead - behind
+    ft = (0.5 * stiffness_n_m) * diff  # per unit radius [N/m]
     out[k, 0] = -ft * d[k, 1]  # ft r t, with r t = (-dy, dx)
     out[k, 1] = ft * d[k, 0]
-    return out
+    return out, float(np.abs(diff).max())
 
 
 def _firas_slope(gap: FloatArray, range_m: float, gain: float) -> FloatArray:
@@ -485,6 +490,7 @@ def formation_force_and_stiffness(
     obstacles: tuple[ArrayLike, ArrayLike] | None = None,
     body_radius_m: float | None = None,
     contact_range_m: float | None = None,
+    pairs: NDArray[np.intp] | None = None,
     block_elems: int = BLOCK_ELEMS,
 ) -> tuple[FloatArray, float]:
     """The formation force and a bound on its stiffness (see :func:`formation_force`).
@@ -495,6 +501,10 @@ def formation_force_and_stiffness(
         As :func:`formation_force`.
     contact_range_m : float, optional
         Range of the robot-robot contact force [m] (default ``params.contact_range_m``).
+    pairs : ndarray of int, shape (P, 2), optional
+        Candidate pairs for the contact force, including every pair of robots closer
+        than ``2 body_radius_m + contact_range_m`` (default: found now,
+        :func:`contact_pairs`).
 
     Returns
     -------
@@ -524,15 +534,19 @@ def formation_force_and_stiffness(
     c = as_float_array(leader_xy, "leader_xy", (2,))
     alpha = params.alpha_m
     a = params.attraction_gain
-    f = circle_attraction(p, c, alpha_m=alpha, gain=a, limit_n=params.attraction_limit_n)
-    # the attraction's stiffness, per robot
+    limit = params.attraction_limit_n
+    # eq. 6, as circle_attraction (the same arithmetic), and its stiffness per robot
     d = p - c
     r2 = (d * d).sum(axis=1)
-    stiff = a * np.maximum(np.abs(3.0 * r2 - alpha * alpha), np.abs(r2 - alpha * alpha))
-    if math.isfinite(params.attraction_limit_n):
-        r = np.sqrt(r2)
-        capped = a * r * np.abs(r2 - alpha * alpha) > params.attraction_limit_n
-        stiff = np.where(capped, params.attraction_limit_n / np.maximum(r, 1e-300), stiff)
+    off = r2 - alpha * alpha
+    f = -a * d * off[:, None]
+    stiff = a * np.maximum(np.abs(3.0 * r2 - alpha * alpha), np.abs(off))
+    if math.isfinite(limit):
+        mag = np.sqrt((f * f).sum(axis=1))
+        f *= np.minimum(1.0, limit / np.maximum(mag, 1e-300))[:, None]
+        capped = mag > limit
+        if capped.any():
+            stiff = np.where(capped, limit / np.maximum(np.sqrt(r2), 1e-300), stiff)
     spacing_bound = 0.0
     if law == "deliverable":
         q = np.where(alive, params.charge_c, 0.0)
@@ -544,14 +558,12 @@ def formation_force_and_stiffness(
             stiff += 4.0 * params.k_r * q * row
     else:
         ks = params.spacing_stiffness_n_m
-        spacing = ring_spacing(p, c, stiffness_n_m=ks, active=alive)
+        spacing, widest = _ring_spacing(d, alive & (r2 > 0), ks)
         f += spacing
-        if ks > 0:
-            # |g+ - g-| from the tangential force: |f_t| = K_s r |g+ - g-| / 2
-            ft = np.sqrt((spacing * spacing).sum(axis=1))
-            lever = 2.0 * ft / np.maximum(ks * np.sqrt(r2), 1e-300)
-            spacing_bound = ks * (2.0 + float(np.where(r2 > 0, lever, 0.0).max(initial=0.0)))
-        contact, contact_stiff = _contact(p, radius_m=radius, range_m=reach, gain=params.contact_gain)
+        spacing_bound = ks * (2.0 + widest)
+        contact, contact_stiff = _contact(
+            p, radius_m=radius, range_m=reach, gain=params.contact_gain, pairs=pairs
+        )
         f += contact
         stiff += contact_stiff
     if obstacles is not None:
@@ -571,22 +583,59 @@ def formation_force_and_stiffness(
     return f, float(stiff.max(initial=0.0)) + spacing_bound
 
 
+def contact_pairs(pos: ArrayLike, reach_m: float) -> NDArray[np.intp]:
+    """Every pair of robots closer than ``reach_m`` (a k-d tree, O(N log N)).
+
+    Parameters
+    ----------
+    pos : array_like, shape (N, 2)
+        Robot centres [m].
+    reach_m : float
+        Distance [m].
+
+    Returns
+    -------
+    ndarray of int, shape (P, 2)
+        Pairs (i, j), i < j, with ``|p_i - p_j| <= reach_m``.
+
+    Notes
+    -----
+    Found with a reach ``2 R + rho + s`` (a skin s), the list stays a superset of the
+    pairs within ``2 R + rho`` until some robot has moved s / 2 (Verlet's neighbour
+    list, Phys. Rev. 159, 1967); the runner rebuilds it only then.
+    """
+    p = _positions(pos)
+    if p.shape[0] < 2:
+        return np.zeros((0, 2), dtype=np.intp)
+    out: NDArray[np.intp] = cKDTree(p).query_pairs(reach_m, output_type="ndarray")
+    return out
+
+
 def _contact(
-    p: FloatArray, *, radius_m: float, range_m: float, gain: float
+    p: FloatArray,
+    *,
+    radius_m: float,
+    range_m: float,
+    gain: float,
+    pairs: NDArray[np.intp] | None = None,
 ) -> tuple[FloatArray, FloatArray]:
-    """:func:`contact_repulsion` and each robot's Gershgorin row sum of its stiffness."""
+    """:func:`contact_repulsion` and each robot's Gershgorin row sum of its stiffness.
+
+    ``pairs`` (P, 2): candidate pairs including every pair within ``2 R + rho``
+    (default: :func:`contact_pairs`)."""
     n = p.shape[0]
     out = np.zeros_like(p)
     stiff = np.zeros(n)
     if n < 2 or gain == 0:
         return out, stiff
-    pairs = cKDTree(p).query_pairs(2.0 * radius_m + range_m, output_type="ndarray")
+    if pairs is None:
+        pairs = contact_pairs(p, 2.0 * radius_m + range_m)
     if pairs.shape[0] == 0:
         return out, stiff
     k, i = pairs[:, 0], pairs[:, 1]
     d = p[k] - p[i]
     r = np.sqrt((d * d).sum(axis=1))
-    keep = r > 0  # coincident bodies: no defined direction
+    keep = (r > 0) & (r < 2.0 * radius_m + range_m)  # coincident bodies: no direction
     k, i, d, r = k[keep], i[keep], d[keep], r[keep]
     gap = r - 2.0 * radius_m
     mag = _firas(gap, range_m, gain)

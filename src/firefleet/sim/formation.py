@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from firefleet.control.formation import formation_force_and_stiffness
+from firefleet.control.formation import contact_pairs, formation_force_and_stiffness
 from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
 from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
@@ -69,6 +69,9 @@ RADIUS_BAND = 0.05
 """Band of ``radius_settling_time_s``: within 5 % of alpha (the issue's bound)."""
 
 _MAX_PLACEMENT_ROUNDS = 10_000
+
+_SKIN_M = 0.5
+"""Skin of the contact pairs' Verlet list [m] (rebuilt when a robot moved half of it)."""
 
 MAX_SUBSTEPS = 10_000
 """Most sub-steps one step of ``dt_s`` may be divided into (a stiffer force: an error)."""
@@ -344,7 +347,23 @@ def simulate_formation(
     w_max = cmd.max_speed_m_s / scenario.robot.wheel_radius_m
     zero_load = np.zeros((n, 2))
 
+    # the regular law's contact pairs: a Verlet list, rebuilt when a robot moved _SKIN_M / 2
+    verlet: list[FloatArray | NDArray[np.intp] | None] = [None, None]
+
+    def candidates(point: FloatArray, reach: float) -> NDArray[np.intp] | None:
+        if cmd.law != "regular":
+            return None
+        built, pairs = verlet
+        if built is not None and pairs is not None:
+            moved = point - built
+            if float((moved * moved).sum(axis=1).max()) < (0.5 * _SKIN_M) ** 2:
+                return pairs  # type: ignore[return-value]
+        pairs = contact_pairs(point, 2.0 * body + reach + _SKIN_M)
+        verlet[:] = [point.copy(), pairs]
+        return pairs  # type: ignore[return-value]
+
     def law(point: FloatArray, centre: FloatArray, active: BoolArray) -> tuple[FloatArray, float]:
+        reach = contact_reach(int(active.sum()))
         force, stiff = formation_force_and_stiffness(
             point,
             centre,
@@ -353,7 +372,8 @@ def simulate_formation(
             active=active,
             obstacles=obstacles,
             body_radius_m=body,
-            contact_range_m=contact_reach(int(active.sum())),
+            contact_range_m=reach,
+            pairs=candidates(point, reach),
         )
         if not np.isfinite(force).all():
             raise FormationDivergedError(
@@ -367,9 +387,14 @@ def simulate_formation(
     for k in range(n_steps + 1):
         active = ~failed if k >= fail_step else all_in
         heading = pose[:, 2]
-        point = pose[:, :2] + look * np.stack([np.cos(heading), np.sin(heading)], axis=1)
-        far = float(np.sqrt(((point - leader[k]) ** 2).sum(axis=1)).max())
-        if not far <= far_m:  # also NaN
+        if diff_drive:
+            point = pose[:, :2] + look * np.stack([np.cos(heading), np.sin(heading)], axis=1)
+        else:
+            point = state[:, :2]
+        gone = point - leader[k]
+        far2 = float((gone * gone).sum(axis=1).max())
+        if not far2 <= far_m * far_m:  # also NaN
+            far = math.sqrt(far2)
             raise FormationDivergedError(
                 f"the formation diverged at t = {k * dt:.3f} s: a robot is {far:.3g} m from "
                 f"the leader, more than {DIVERGENCE_FACTOR:g} x (alpha_m + its farthest "
@@ -418,7 +443,7 @@ def simulate_formation(
             pose = drive.pose
         else:
             feed = damping * leader_v[k] + cmd.mass_kg * leader_a[k]
-            held = state[~active]
+            held = state[~active] if active is not all_in else None
             h = dt / n_sub
             for j in range(n_sub):
                 if j > 0:  # the force at the sub-step, the leader moved on linearly
@@ -426,8 +451,8 @@ def simulate_formation(
                     force, _ = law(state[:, :2], centre, active)
                 force[active] += feed
                 state = mass_damper_step(state, force, h, md)
-            # a failed point mass is held where it stopped
-            state[~active] = np.concatenate([held[:, :2], np.zeros((held.shape[0], 2))], axis=1)
+            if held is not None:  # a failed point mass is held where it stopped
+                state[~active] = np.concatenate([held[:, :2], np.zeros((held.shape[0], 2))], axis=1)
             vx, vy = state[:, 2], state[:, 3]
             moving = vx * vx + vy * vy > 1e-12
             pose = np.column_stack([state[:, :2], np.where(moving, np.arctan2(vy, vx), pose[:, 2])])
