@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import tracemalloc
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -226,16 +227,17 @@ def test_ring_spacing_is_minus_the_gradient_of_the_gap_energy() -> None:
         assert along[k] == pytest.approx(-grad, abs=1e-7)
 
 
-def _jacobian(fun: object, pos: FloatArray, h: float = 1e-7) -> FloatArray:
+def _jacobian(
+    fun: Callable[[FloatArray], FloatArray], pos: FloatArray, h: float = 1e-7
+) -> FloatArray:
     n = pos.size
     jac = np.empty((n, n))
     for j in range(n):
         up, down = pos.copy().reshape(-1), pos.copy().reshape(-1)
         up[j] += h
         down[j] -= h
-        jac[:, j] = (fun(up.reshape(pos.shape)) - fun(down.reshape(pos.shape))).reshape(-1) / (
-            2 * h
-        )  # type: ignore[operator]
+        diff = fun(up.reshape(pos.shape)) - fun(down.reshape(pos.shape))
+        jac[:, j] = diff.reshape(-1) / (2 * h)
     return jac
 
 

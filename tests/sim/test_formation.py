@@ -14,9 +14,9 @@ from scipy.optimize import brentq
 
 from firefleet import compute_metrics, load_scenario, simulate
 from firefleet.cli import main
-from firefleet.scenarios.schema import Formation, LeaderPath, Scenario, parse_scenario
 from firefleet.errors import InputError
 from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
+from firefleet.scenarios.schema import Formation, LeaderPath, Scenario, parse_scenario
 from firefleet.sim import formation as formation_module
 from firefleet.sim.formation import (
     FormationDivergedError,
@@ -400,5 +400,6 @@ def test_diverging_run_writes_nothing(tmp_path: Path, capsys: pytest.CaptureFixt
     out = tmp_path / "o"
     assert main(["run", str(path), "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "stiffness" in err and len(err.strip().splitlines()) == 1
+    assert "stiffness" in err
+    assert len(err.strip().splitlines()) == 1
     assert not out.exists()

@@ -643,8 +643,8 @@ def _contact(
     out[:, 0] = np.bincount(k, push[:, 0], n) - np.bincount(i, push[:, 0], n)
     out[:, 1] = np.bincount(k, push[:, 1], n) - np.bincount(i, push[:, 1], n)
     pair = 2.0 * np.maximum(_firas_slope(gap, range_m, gain), mag / r)
-    stiff = np.bincount(k, pair, n) + np.bincount(i, pair, n)
-    return out, stiff
+    total = np.asarray(np.bincount(k, pair, n) + np.bincount(i, pair, n), dtype=np.float64)
+    return out, total
 
 
 def _obstacle_stiffness(

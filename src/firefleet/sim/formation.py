@@ -348,19 +348,19 @@ def simulate_formation(
     zero_load = np.zeros((n, 2))
 
     # the regular law's contact pairs: a Verlet list, rebuilt when a robot moved _SKIN_M / 2
-    verlet: list[FloatArray | NDArray[np.intp] | None] = [None, None]
+    built_at: list[FloatArray] = []
+    built_pairs: list[NDArray[np.intp]] = []
 
     def candidates(point: FloatArray, reach: float) -> NDArray[np.intp] | None:
         if cmd.law != "regular":
             return None
-        built, pairs = verlet
-        if built is not None and pairs is not None:
-            moved = point - built
+        if built_at:
+            moved = point - built_at[0]
             if float((moved * moved).sum(axis=1).max()) < (0.5 * _SKIN_M) ** 2:
-                return pairs  # type: ignore[return-value]
-        pairs = contact_pairs(point, 2.0 * body + reach + _SKIN_M)
-        verlet[:] = [point.copy(), pairs]
-        return pairs  # type: ignore[return-value]
+                return built_pairs[0]
+        built_at[:] = [point.copy()]
+        built_pairs[:] = [contact_pairs(point, 2.0 * body + reach + _SKIN_M)]
+        return built_pairs[0]
 
     def law(point: FloatArray, centre: FloatArray, active: BoolArray) -> tuple[FloatArray, float]:
         reach = contact_reach(int(active.sum()))
