@@ -91,8 +91,16 @@ def team_scenario(n: int, law: str = "regular", *, seed: int = 1) -> Scenario:
         "scatter_m": max(5.0, alpha / 2.0) if n < 1_000 else 40.0,
         "formed_by_s": 55.0,
     }
+    claims: list[dict[str, Any]] = [
+        {"metric": "radius_error_max_m", "op": "<=", "value": 0.01 * alpha},
+        {"metric": "spacing_error_max_deg", "op": "<=", "value": 2.0},
+        {"metric": "min_clearance_m", "op": ">", "value": 0.0},
+    ]
     if law == "deliverable":
+        # the deliverable's law: all robots on the circle, an irregular polygon, and no
+        # contact force (robots may touch on the way)
         command["k_r"] = 10.0 * (0.94 / 3.53) ** 2
+        claims = claims[:1]
     return parse_scenario(
         {
             "name": f"formation-{law}-{n}",
@@ -101,23 +109,25 @@ def team_scenario(n: int, law: str = "regular", *, seed: int = 1) -> Scenario:
             "seed": seed,
             "poses": [[0.0, 0.0, 0.0]] * n,
             "command": command,
-            "claims": [
-                {"metric": "radius_error_max_m", "op": "<=", "value": 0.01 * alpha},
-                {"metric": "spacing_error_max_deg", "op": "<=", "value": 2.0},
-                {"metric": "min_clearance_m", "op": ">", "value": 0.0},
-            ],
+            "claims": claims,
         }
     )
 
 
 def run_converging(scenario: Scenario, repeats: int = RUN_REPEATS) -> dict[str, Any]:
-    """Time whole runs of ``scenario`` (best of ``repeats``), and judge the last one."""
-    best = math.inf
+    """Time whole runs of ``scenario`` (best of ``repeats``), and judge the last one.
+
+    Both the wall time and this process's CPU time are measured: the run is single
+    threaded (BLAS threads set to 1), so on an idle machine they agree, and on a shared
+    one the CPU time is the run's own cost (the wall time also counts the neighbours).
+    """
+    best = best_cpu = math.inf
     result = None
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         result = simulate(scenario)
         best = min(best, time.perf_counter() - t0)
+        best_cpu = min(best_cpu, time.process_time() - c0)
     assert result is not None
     metrics = compute_metrics(result)
     claims = {c.metric: c.holds(metrics[c.metric]) for c in scenario.claims}
@@ -133,6 +143,7 @@ def run_converging(scenario: Scenario, repeats: int = RUN_REPEATS) -> dict[str, 
         "claims": claims,
         "claims_hold": all(claims.values()),
         "steps_per_s": scenario.n_steps / best,
+        "steps_per_cpu_s": scenario.n_steps / best_cpu,
         "max_substeps": int(np.max(result.extra["substeps"])),
         "mean_substeps": float(np.mean(result.extra["substeps"])),
     }
@@ -289,28 +300,30 @@ def run(console: Console) -> dict[str, Any]:
         run_converging(team_scenario(FLOOR_N)),
         run_converging(team_scenario(200, "deliverable"), repeats=1),
     ]
-    table = Table(title="whole runs from random starts (simulate, metrics excluded)")
-    for col in ("N", "law", "alpha", "radius err", "spacing err", "min gap", "claims"):
+    table = Table(
+        title="whole runs from random starts (simulate; metrics not timed)",
+        caption="radius err [mm], spacing err [deg], min gap between bodies [m]; steps per "
+        "wall second and per CPU second; deliverable: radius claim only (no contact force)",
+    )
+    for col in ("N", "law", "alpha", "radius", "spacing", "gap", "claims", "steps/s", "/cpu s"):
         table.add_column(col, justify="right")
-    table.add_column("steps/s", justify="right")
-    table.add_column("sub-steps max/mean", justify="right")
     for r in runs:
         failed = [k for k, ok in r["claims"].items() if not ok]
         table.add_row(
             f"{r['n_robots']:,}",
-            r["law"],
+            r["law"][:3],
             f"{r['alpha_m']:g} m",
-            f"{1e3 * r['radius_error_max_m']:.3g} mm",
-            f"{r['spacing_error_max_deg']:.3g} deg",
-            f"{r['min_clearance_m']:.3f} m",
-            "fail: " + ", ".join(failed) if failed else "hold",
+            f"{1e3 * r['radius_error_max_m']:.2g}",
+            f"{r['spacing_error_max_deg']:.2g}",
+            f"{r['min_clearance_m']:.3f}",
+            "FAIL" if failed else "hold",
             f"{r['steps_per_s']:,.0f}",
-            f"{r['max_substeps']} / {r['mean_substeps']:.2f}",
+            f"{r['steps_per_cpu_s']:,.0f}",
         )
     console.print(table)
 
     big = runs[2]
-    rate = big["steps_per_s"]
+    rate = big["steps_per_cpu_s"]
     by_n = {r["n_robots"]: r for r in laws}
     traced = by_n[MEMORY_N]["step_traced_peak_bytes"]
     rss = by_n[MEMORY_N]["max_rss_after_bytes"]
@@ -327,8 +340,9 @@ def run(console: Console) -> dict[str, Any]:
     for col in ("floor", "measured", "bound", "result"):
         table.add_column(col)
     table.add_row(
-        "N = 1,000, regular law, a whole converging run",
-        f"{rate:,.0f} steps/s, claims {'hold' if big['claims_hold'] else 'fail'}",
+        "N = 1,000, regular law, whole run",
+        f"{rate:,.0f} steps/CPU s ({big['steps_per_s']:,.0f}/wall s), claims "
+        + ("hold" if big["claims_hold"] else "fail"),
         f">= {FLOOR_STEPS_PER_S:g}, claims hold",
         _verdict(rate >= FLOOR_STEPS_PER_S and big["claims_hold"]),
     )
