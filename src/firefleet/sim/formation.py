@@ -19,6 +19,25 @@ point, a point ``l`` ahead of the axle centre (Lawton, Beard and Young, "A decen
 approach to formation maneuvers", IEEE Trans. Robotics and Automation 19(6), 2003):
 its velocity is any u the wheels can give, so the point-mass law carries over.
 
+Stability (issue 13). Each step holds the force over ``dt_s`` (a sampled controller),
+and the exact step of eq. 5 under a held restoring force of stiffness kappa is stable
+only for kappa below about ``2 (B + k_d) / dt_s`` (400 N/m at the deliverable's 2 N s/m
+and 10 ms; :func:`substeps`). What made teams diverge, measured: with eq. 6 uncapped
+(the README's keys) 100 robots drawn up to 14 m from a 10 m circle start with an
+attraction of 909 N (r (r^2 - alpha^2)), meet within 0.08 s, and the contact force at
+its 1 mm gap floor (4e7 N, stiffness ~3 eta / g^4) and the Coulomb force (2 k_r / r^3
+per pair) are far beyond the bound: positions run off to hundreds of km (the same for
+20 robots on the 3 m circle, from 280 N at the corners). With the attraction capped,
+the first regular law (tangential Coulomb) still kicked robots apart (a 5e4 N contact
+at 0.7 s) and left robots 3.5 m inside the circle; the deliverable's law, 3.7 m (a ring
+of 100 charges walls late robots out: its field near the ring, ~2 k_r N / (2 pi alpha
+delta), beats a 10 N attraction). The remedies: the force's stiffness is bounded every
+step (:func:`firefleet.control.formation.stiffness_bound`) and the step divided into
+:func:`substeps` when needed; the regular law spaces by angular neighbours (stiffness
+2 K_s whatever N); the attraction is capped by default; a team that cannot stand on the
+circle is refused; and a run that still leaves every bound stops with
+:class:`FormationDivergedError` (no result is written).
+
 A failed robot stops where it is (a point mass is held; a diff-drive robot's wheel
 references drop to 0) and leaves the formation: it carries no charge and has no place
 on the circle, but its body stays, and the contact and obstacle forces see it.
