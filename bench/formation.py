@@ -302,7 +302,7 @@ def run(console: Console) -> dict[str, Any]:
     ]
     table = Table(
         title="whole runs from random starts (simulate; metrics not timed)",
-        caption="radius err [mm], spacing err [deg], min gap between bodies [m]; steps per "
+        caption="radius error (mm), spacing error (deg), min gap between bodies (m); steps per "
         "wall second and per CPU second; deliverable: radius claim only (no contact force)",
     )
     for col in ("N", "law", "alpha", "radius", "spacing", "gap", "claims", "steps/s", "/cpu s"):

@@ -346,6 +346,31 @@ def test_regular_law_converges_for_teams(n: int, alpha_m: float) -> None:
     assert float(m["min_clearance_m"]) > 0.0  # type: ignore[arg-type]
 
 
+def test_issue_13_team_with_the_readme_keys_converges() -> None:
+    # 100 robots on a 10 m circle with the README's keys (eq. 6 with a = 1, now capped
+    # at 10 N by default; scatter 10 m): diverged to ~250 km before issue 13
+    scn = parse_scenario(
+        {
+            "name": "readme",
+            "title": "t",
+            "duration_s": 30.0,
+            "seed": 0,
+            "poses": [[0.0, 0.0, 0.0]] * 100,
+            "command": {
+                "kind": "formation",
+                "law": "regular",
+                "alpha_m": 10.0,
+                "scatter_m": 10.0,
+                "formed_by_s": 25.0,
+            },
+        }
+    )
+    m = compute_metrics(simulate(scn))
+    assert float(m["radius_error_max_m"]) <= 0.01 * 10.0  # type: ignore[arg-type]
+    assert float(m["spacing_error_max_deg"]) <= 2.0  # type: ignore[arg-type]
+    assert float(m["min_clearance_m"]) > 0.0  # type: ignore[arg-type]
+
+
 def test_regular_law_converges_for_1000_robots() -> None:
     # 1,000 robots from a 80 m square onto a 150 m circle (side 0.94 m): formed by 35 s
     scn = _team(1000, 150.0, duration_s=40.0, scatter_m=40.0, formed_by_s=35.0)
