@@ -1,6 +1,7 @@
 """FastSLAM's per-step update with given association as compiled (numba) loops.
 
-:func:`firefleet.estimation.fastslam.fastslam_step` is vectorised over particles, but with
+:func:`firefleet.estimation.fastslam.fastslam_step` with unknown association is vectorised
+over particles, but with
 given association a step loops over its few observations (Victoria Park: 0 to 5, the
 PythonRobotics scenario: 8), and each NumPy call on a (P, 2, 2) stack pays ~1-5 us of
 overhead for ~0.1 us of arithmetic per particle: about 30 calls per observation. These
