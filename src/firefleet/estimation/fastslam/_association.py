@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet.estimation.fastslam._kernel import update_landmarks
 from firefleet.estimation.fastslam._params import FastSlamParams, SensorView
 from firefleet.estimation.fastslam._state import FastSlamState, grow, particle_deltas
 from firefleet.estimation.particle_filter import (
@@ -55,18 +56,6 @@ def _sandwich2(h: FloatArray, s: FloatArray) -> FloatArray:
     out[..., 1, 0] = a10 * h00 + a11 * h01
     out[..., 1, 1] = a10 * h10 + a11 * h11
     return out
-
-
-def _init_landmarks(
-    poses: FloatArray, z: FloatArray, r: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Mean ``(P, 2)`` and covariance ``(P, 2, 2)`` of landmarks first seen at ``z``."""
-    ang = poses[:, 2] + z[1]
-    m = np.stack([poses[:, 0] + z[0] * np.cos(ang), poses[:, 1] + z[0] * np.sin(ang)], axis=-1)
-    _, h_m = range_bearing_jacobians(poses, m)
-    h_inv, _ = inv2(h_m)
-    s = _sandwich2(h_inv, r)
-    return m, 0.5 * (s + np.swapaxes(s, -1, -2))
 
 
 def _associate(
@@ -204,27 +193,15 @@ def step_unknown(
         poses[:, 2] = wrap_angle(poses[:, 2])
         state.poses = poses
 
-    # pass 2: landmark Kalman updates (or initialisation) from the sampled pose
+    # pass 2: landmark Kalman updates (or initialisation) from the sampled pose, compiled
     seen = np.zeros(state.active.shape, dtype=bool)
     for k, j, skip in plan:
-        r = z_cov[k]
         new = fresh[ar, j]
-        # a new landmark's slot holds no estimate yet: a placeholder 1 m away stands in
-        lm_mu = np.where(new[:, None], state.poses[:, :2] + 1.0, state.mu[ar, j])
-        lm_sigma = state.sigma[ar, j]
-        init_mu, init_sigma = _init_landmarks(state.poses, z[k], r)
-        z_pred = predict_range_bearing(state.poses, lm_mu)
-        _, h_m = range_bearing_jacobians(state.poses, lm_mu)
-        q = _sandwich2(h_m, lm_sigma) + r
-        q_inv, _ = inv2(q)
-        gain = _matmul(_matmul(lm_sigma, np.swapaxes(h_m, -1, -2)), q_inv)
-        upd_mu = lm_mu + _matmul(gain, innovation(z[k], z_pred)[..., None])[..., 0]
-        upd_sigma = lm_sigma - _matmul(_matmul(gain, q), np.swapaxes(gain, -1, -2))
-        upd_sigma = 0.5 * (upd_sigma + np.swapaxes(upd_sigma, -1, -2))
+        update_landmarks(
+            state.poses, state.mu, state.sigma, np.where(skip, -1, j), new, z[k], z_cov[k]
+        )
         keep = ar[~skip]
         js = j[~skip]
-        state.mu[keep, js] = np.where(new[:, None], init_mu, upd_mu)[~skip]
-        state.sigma[keep, js] = np.where(new[:, None, None], init_sigma, upd_sigma)[~skip]
         state.active[keep, js] = True
         fresh[keep, js] = False
         seen[keep, js] = True
