@@ -63,7 +63,13 @@ GOOD = ["ODOMETRY 0 1 1 0 0 0.01 0 0 0.01 0 0.01", "BR 1 7 0.5 3.0 0.01 0.1"]
         ("LANDMARK 1.5 3 1 1 0.4 0 0.4", "ids must be integers"),
         ("BR 1 3 0.1 -2 0.01 0.1", "must be > 0"),
         ("VERTEX 1 0 0 0", "unknown record 'VERTEX'"),
-        ("ODOMETRY 1 2 1 0 0 -1 0 0 0.01 0 0.01", "not positive semi-definite"),
+        ("ODOMETRY 1 2 1 0 0 -1 0 0 0.01 0 0.01", "variance c11 (field 6) must be >= 0, got -1"),
+        ("ODOMETRY 1 2 1 0 0 0.01 0 0 0.01 0 -1e-4", "variance c33 (field 11) must be >= 0"),
+        ("ODOMETRY 1 2 1 0 0 0.01 0.5 0 0.01 0 0.01", "not positive semi-definite"),
+        # a negative or zero variance of an observation was accepted before
+        ("LANDMARK 1 3 1 1 -0.4 0 0.4", "LANDMARK variance c11 (field 5) must be > 0, got -0.4"),
+        ("LANDMARK 1 3 1 1 0.4 0 0", "LANDMARK variance c22 (field 7) must be > 0, got 0"),
+        ("LANDMARK 1 3 1 1 0.4 0.5 0.4", "not positive definite: c12 = 0.5"),
     ],
 )
 def test_malformed_line_is_named_with_its_number(bad: str, message: str) -> None:

@@ -48,18 +48,21 @@ The package's modules: ``_params`` (tuning), ``_state`` (particles), ``_kernel``
 """
 
 from firefleet.estimation.fastslam._params import FastSlamParams, SensorView
-from firefleet.estimation.fastslam._run import FastSlamResult, run_fastslam
+from firefleet.estimation.fastslam._run import FastSlamResult, fastslam_memory_bytes, run_fastslam
 from firefleet.estimation.fastslam._state import FastSlamState, fastslam_init
 from firefleet.estimation.fastslam._step import fastslam_step
 from firefleet.estimation.fastslam._summary import (
+    BOUND_M,
     MATCH_RADIUS_M,
     dead_reckoning_landmarks,
     landmarks_csv,
+    slam_claims,
     slam_summary,
     trajectory_csv,
 )
 
 __all__ = [
+    "BOUND_M",
     "MATCH_RADIUS_M",
     "FastSlamParams",
     "FastSlamResult",
@@ -67,9 +70,11 @@ __all__ = [
     "SensorView",
     "dead_reckoning_landmarks",
     "fastslam_init",
+    "fastslam_memory_bytes",
     "fastslam_step",
     "landmarks_csv",
     "run_fastslam",
+    "slam_claims",
     "slam_summary",
     "trajectory_csv",
 ]

@@ -9,13 +9,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet.errors import InputError
 from firefleet.estimation.fastslam._params import FastSlamParams, SensorView
 from firefleet.estimation.fastslam._state import fastslam_init
 from firefleet.estimation.fastslam._step import fastslam_step
 from firefleet.estimation.logs import SlamLog
 from firefleet.estimation.particle_filter import ProgressCallback, weighted_pose_mean
 
-__all__ = ["FastSlamResult", "run_fastslam"]
+__all__ = ["FastSlamResult", "fastslam_memory_bytes", "run_fastslam"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -72,6 +73,44 @@ class FastSlamResult:
     calibration: FloatArray | None = None
 
 
+def fastslam_memory_bytes(log: SlamLog, params: FastSlamParams, *, keep_path: bool = True) -> int:
+    """Bytes :func:`run_fastslam` needs on ``log``, estimated before allocating any.
+
+    The particles' maps (``57 P C`` bytes, C landmark slots: the log's landmark ids with
+    given association, at least 16 with unknown), twice (resampling copies them), the
+    per-observation (P, C, 2, 2) work arrays of unknown association (``320 P C``), and
+    with ``keep_path`` every particle's pose and parent at every step (``32 T P``).
+
+    Parameters
+    ----------
+    log : SlamLog
+    params : FastSlamParams
+    keep_path : bool
+        As :func:`run_fastslam`'s.
+
+    Returns
+    -------
+    int
+        Bytes (a lower bound with unknown association, whose map may grow).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation.logs import parse_log
+    >>> log = parse_log(["ODOMETRY 0 1 1 0 0 1e-4 0 0 1e-4 0 1e-6",
+    ...                  "LANDMARK 1 7 3 1 0.01 0 0.01"])
+    >>> fastslam_memory_bytes(log, FastSlamParams(n_particles=1000))
+    378000
+    """
+    p = params.n_particles
+    known = params.association == "known"
+    c = max(int(log.landmark_ids.size), 1) if known else max(int(log.landmark_ids.size), 16)
+    per_particle = c * (2 * 57 + (0 if known else 320)) + 200
+    if keep_path:
+        per_particle += 32 * log.n_poses
+    return int(p * per_particle)
+
+
 def run_fastslam(
     log: SlamLog,
     rng: np.random.Generator,
@@ -104,6 +143,15 @@ def run_fastslam(
     """
     prm = params or FastSlamParams()
     known = prm.association == "known"
+    if log.n_observations == 0:
+        raise InputError(
+            f"{log.name}: no LANDMARK or BR lines: FastSLAM needs landmark observations"
+        )
+    if known and log.landmark_ids.size == 0:
+        raise InputError(
+            f"{log.name}: no observation names its landmark (every id is -1): "
+            "given association needs landmark ids; use unknown association"
+        )
     sigma_cal = np.array([prm.heading_drift_sigma, prm.turn_scale_sigma])
     calibration = rng.standard_normal((prm.n_particles, 2)) * sigma_cal if sigma_cal.any() else None
     state = fastslam_init(
