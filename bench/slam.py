@@ -12,7 +12,7 @@ returns every number as a JSON-able dict. Run directly: ``python bench/slam.py``
    (iSAM2 over the poses in order, then Levenberg-Marquardt over all factors, from gtsam's
    ``load2D`` reading of the same file). Absolute trajectory error after rigid alignment.
 2. Peer: PythonRobotics ``SLAM/FastSLAM1/fast_slam1.py`` imported from the fetched mirror
-   (``/work/.mirror/AtsushiSakai+PythonRobotics``, never copied into this repository) on
+   (a checkout or git directory named by ``$PYTHONROBOTICS``, never copied here) on
    its own scenario (8 RFID landmarks, its noise, 100 particles, 50 s at 0.1 s). The
    scenario is generated once with the peer's own ``observation`` function, then both
    filters run on the same inputs; firefleet's FastSLAM 1.0 gets the peer's motion noise
@@ -51,12 +51,17 @@ from firefleet.estimation.fastslam import (
     fastslam_init,
     fastslam_step,
     run_fastslam,
+    slam_claims,
     slam_summary,
 )
 from firefleet.estimation.logs import SlamLog, gtsam_text, read_log
 
-VICTORIA = Path("/work/shared/data/slam/victoria_park.txt")
-MIRROR = Path("/work/.mirror/AtsushiSakai+PythonRobotics/repo")
+REPO = Path(__file__).resolve().parents[1]
+DATA = Path(os.environ.get("FIREFLEET_DATA", REPO.parent / "shared" / "data"))
+"""The shared data folder: ``../shared/data`` beside the repository, or ``$FIREFLEET_DATA``."""
+VICTORIA = DATA / "slam" / "victoria_park.txt"
+PEER_ENV = "PYTHONROBOTICS"
+"""Environment variable naming a PythonRobotics checkout (or its bare git directory)."""
 SEEDS = tuple(range(20))
 FLOOR_ATE_M = 5.0
 FLOOR_TIME_S = 60.0
@@ -114,12 +119,15 @@ def gtsam_optimum(log: SlamLog, path: Path) -> tuple[np.ndarray, float, float]:
     return ref, float(graph.error(best)), seconds
 
 
-_CALIBRATED = FastSlamParams(
-    version=2, odometry_noise_scale=2.0, heading_drift_sigma=0.003, turn_scale_sigma=0.05
-)
+_CALIBRATED = FastSlamParams(version=2)  # the defaults: calibrated, sigmas x 2
 VP_CONFIGS: tuple[tuple[str, FastSlamParams], ...] = (
     ("calibrated, x2", _CALIBRATED),
-    ("white noise, x4", FastSlamParams(version=2, odometry_noise_scale=4.0)),
+    (
+        "white noise, x4",
+        replace(
+            _CALIBRATED, odometry_noise_scale=4.0, heading_drift_sigma=0.0, turn_scale_sigma=0.0
+        ),
+    ),
     ("calibrated, x2", replace(_CALIBRATED, n_particles=300)),
 )
 
@@ -127,7 +135,7 @@ VP_CONFIGS: tuple[tuple[str, FastSlamParams], ...] = (
 def bench_victoria(console: Console) -> dict[str, Any]:
     """Whole Victoria Park set: ATE against GTSAM and run time, over SEEDS, two tunings."""
     if not VICTORIA.exists():
-        console.print(f"  {VICTORIA} absent: Victoria Park skipped")
+        console.print(f"  {VICTORIA} absent (set $FIREFLEET_DATA): Victoria Park skipped")
         return {"skipped": True}
     log = read_log(VICTORIA)
     console.print("  GTSAM reference (iSAM2 + Levenberg-Marquardt) ...")
@@ -196,14 +204,22 @@ def bench_victoria(console: Console) -> dict[str, Any]:
     }
 
 
-def _peer_module(tmp: Path) -> Any:
-    """PythonRobotics' fast_slam1 module, extracted from the mirror into ``tmp``."""
-    git_dir = MIRROR
+def _peer_path() -> Path | None:
+    """The PythonRobotics checkout or git directory of ``$PYTHONROBOTICS``, if present."""
+    value = os.environ.get(PEER_ENV)
+    return Path(value) if value and Path(value).exists() else None
+
+
+def _peer_module(peer: Path, tmp: Path) -> Any:
+    """PythonRobotics' fast_slam1 module, extracted from ``peer`` into ``tmp``."""
     for rel in ("SLAM/FastSLAM1/fast_slam1.py", "utils/angle.py", "utils/__init__.py"):
         out = tmp / rel
         out.parent.mkdir(parents=True, exist_ok=True)
-        text = subprocess.run(
-            ["git", f"--git-dir={git_dir}", "show", f"HEAD:{rel}"],
+        if (peer / rel).exists():  # a checkout
+            out.write_text((peer / rel).read_text())
+            continue
+        text = subprocess.run(  # a git directory (a mirror)
+            ["git", f"--git-dir={peer}", "show", f"HEAD:{rel}"],
             capture_output=True,
             check=False,
             text=True,
@@ -217,11 +233,12 @@ def _peer_module(tmp: Path) -> Any:
 
 def bench_peer(console: Console) -> dict[str, Any]:
     """Both FastSLAM 1.0s on the peer's own scenario, same inputs, one run each."""
-    if not MIRROR.exists():
-        console.print(f"  peer mirror {MIRROR} absent: peer comparison skipped")
+    peer = _peer_path()
+    if peer is None:
+        console.print(f"  PythonRobotics not found (set ${PEER_ENV}): peer comparison skipped")
         return {"skipped": True}
     with tempfile.TemporaryDirectory() as tmp:
-        pr = _peer_module(Path(tmp))
+        pr = _peer_module(peer, Path(tmp))
         rfid = np.array(
             [
                 [10.0, -2.0],
@@ -416,6 +433,7 @@ def bench_simulation(console: Console) -> dict[str, Any]:
                     doc = slam_summary(
                         log, run_fastslam(log, np.random.default_rng(seed), params=prm)
                     )
+                    claims = slam_claims(doc, association=association)
                     runs.append(
                         {
                             "drive": drive,
@@ -424,7 +442,7 @@ def bench_simulation(console: Console) -> dict[str, Any]:
                             "landmark_rms_m": doc["landmark_rms_m"],
                             "odometry_position_rms_m": doc["odometry_position_rms_m"],
                             "duplicate_landmarks": doc["duplicate_landmarks"],
-                            "all_claims": all(c["passed"] for c in doc["claims"]),
+                            "all_claims": all(c.holds(doc[c.metric]) for c in claims),
                         }
                     )
             rows.append({"version": version, "association": association, "runs": runs})
