@@ -47,7 +47,7 @@ The package's modules: ``_params`` (tuning), ``_state`` (particles), ``_kernel``
 ``_run`` (a whole log), ``_summary`` (errors, claims, CSV).
 """
 
-from firefleet.estimation.fastslam._params import FastSlamParams, SensorView
+from firefleet.estimation.fastslam._params import FastSlamParams, SensorView, default_n_particles
 from firefleet.estimation.fastslam._run import FastSlamResult, fastslam_memory_bytes, run_fastslam
 from firefleet.estimation.fastslam._state import FastSlamState, fastslam_init
 from firefleet.estimation.fastslam._step import fastslam_step
@@ -69,6 +69,7 @@ __all__ = [
     "FastSlamState",
     "SensorView",
     "dead_reckoning_landmarks",
+    "default_n_particles",
     "fastslam_init",
     "fastslam_memory_bytes",
     "fastslam_step",

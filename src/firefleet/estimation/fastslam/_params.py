@@ -7,7 +7,7 @@ from typing import Literal
 
 from firefleet.errors import InputError, check_fields
 
-__all__ = ["FastSlamParams", "SensorView"]
+__all__ = ["FastSlamParams", "SensorView", "default_n_particles"]
 
 
 @dataclass(frozen=True)
@@ -115,3 +115,19 @@ class SensorView:
 
     def __post_init__(self) -> None:
         check_fields(self, "sensor", positive=("fov_rad", "max_range_m"))
+
+
+def default_n_particles(association: Literal["known", "unknown"]) -> int:
+    """The number of particles ``firefleet slam`` runs by default.
+
+    300 with given association (compiled: about 1 s for the whole of Victoria Park,
+    whose ATE against GTSAM's optimum it brings from 3.9 m with 100 particles to 3.2 m,
+    median of 20 seeds, worst 8 m instead of 23 m); 100 with unknown association, whose
+    NumPy association costs about 3 ms per step with 100 particles.
+
+    Examples
+    --------
+    >>> default_n_particles("known"), default_n_particles("unknown")
+    (300, 100)
+    """
+    return 300 if association == "known" else 100
