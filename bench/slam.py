@@ -11,7 +11,10 @@ returns every number as a JSON-able dict. Run directly: ``python bench/slam.py``
    the previous tuning); reference: GTSAM's batch optimum
    (iSAM2 over the poses in order, then Levenberg-Marquardt over all factors, from gtsam's
    ``load2D`` reading of the same file). Absolute trajectory error after rigid alignment.
-2. Peer: PythonRobotics ``SLAM/FastSLAM1/fast_slam1.py`` imported from the fetched mirror
+   1b: the command a user runs, ``firefleet slam victoria_park.txt --seed S`` with no
+   other option (300 particles), for S = 1, 2, 3: ATE and wall time of the command.
+   The data is read from ``../shared/data`` beside the repository or ``$FIREFLEET_DATA``.
+2. Peer: PythonRobotics ``SLAM/FastSLAM1/fast_slam1.py`` imported from a peer copy
    (a checkout or git directory named by ``$PYTHONROBOTICS``, never copied here) on
    its own scenario (8 RFID landmarks, its noise, 100 particles, 50 s at 0.1 s). The
    scenario is generated once with the peer's own ``observation`` function, then both
@@ -132,6 +135,46 @@ VP_CONFIGS: tuple[tuple[str, FastSlamParams], ...] = (
 )
 
 
+DEFAULT_SEEDS = (1, 2, 3)
+
+
+def bench_default_command(console: Console, ref: np.ndarray) -> dict[str, Any]:
+    """``firefleet slam victoria_park.txt --seed S`` with no other option, S = 1, 2, 3.
+
+    Each run is the command itself in a fresh process (its wall time includes start-up
+    and numba's compiled-kernel cache); its ``trajectory.csv`` is compared with GTSAM's
+    optimum ``ref`` (T, 2) by the ATE after rigid alignment.
+    """
+    runs: list[dict[str, Any]] = []
+    code = "import sys; from firefleet.cli import main; sys.exit(main(sys.argv[1:]))"
+    for seed in DEFAULT_SEEDS:
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp) / "vp"
+            args = [str(VICTORIA), "--seed", str(seed), "--out", str(out), "--no-plots"]
+            t0 = time.perf_counter()
+            proc = subprocess.run(
+                [sys.executable, "-c", code, "slam", *args], capture_output=True, check=False
+            )
+            wall = time.perf_counter() - t0
+            if proc.returncode != 0:
+                raise RuntimeError(f"firefleet slam exited {proc.returncode}: {proc.stderr!r}")
+            path = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)[:, 1:3]
+        runs.append(
+            {"seed": seed, "ate_m": absolute_trajectory_error(path, ref), "wall_time_s": wall}
+        )
+    table = Table(title="1b. firefleet slam victoria_park.txt --seed S (default options)")
+    for col in ("seed", "ATE vs GTSAM (m)", "wall time (s)"):
+        table.add_column(col, justify="right")
+    for r in runs:
+        table.add_row(str(r["seed"]), f"{r['ate_m']:.2f}", f"{r['wall_time_s']:.1f}")
+    console.print(table)
+    return {
+        "runs": runs,
+        "median_ate_m": float(np.median([r["ate_m"] for r in runs])),
+        "max_wall_time_s": max(r["wall_time_s"] for r in runs),
+    }
+
+
 def bench_victoria(console: Console) -> dict[str, Any]:
     """Whole Victoria Park set: ATE against GTSAM and run time, over SEEDS, two tunings."""
     if not VICTORIA.exists():
@@ -192,9 +235,11 @@ def bench_victoria(console: Console) -> dict[str, Any]:
         )
     console.print(table)
     console.print(f"  odometry-only ATE {ate_odo:.1f} m; GTSAM final error {err:.1f}, {gt_s:.1f} s")
+    default = bench_default_command(console, ref)
     return {
         "poses": log.n_poses,
         "observations": log.n_observations,
+        "default_command": default,
         "configs": configs,
         "median_ate_m": configs[0]["median_ate_m"],
         "odometry_ate_m": ate_odo,
@@ -496,6 +541,23 @@ def run(console: Console) -> dict[str, Any]:
                 f"< {FLOOR_TIME_S} s",
                 f"{vp['max_run_time_s']:.2f} s",
                 vp["max_run_time_s"] < FLOOR_TIME_S,
+            )
+        )
+        dflt = vp["default_command"]
+        floors.append(
+            (
+                "Victoria Park, default options, median ATE (seeds 1-3)",
+                f"<= {FLOOR_ATE_M} m",
+                f"{dflt['median_ate_m']:.2f} m",
+                dflt["median_ate_m"] <= FLOOR_ATE_M,
+            )
+        )
+        floors.append(
+            (
+                "Victoria Park, default options, each command",
+                f"< {FLOOR_TIME_S} s",
+                f"{dflt['max_wall_time_s']:.1f} s",
+                dflt["max_wall_time_s"] < FLOOR_TIME_S,
             )
         )
     if not peer.get("skipped"):
