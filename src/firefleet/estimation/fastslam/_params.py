@@ -17,7 +17,8 @@ class FastSlamParams:
     Attributes
     ----------
     n_particles : int
-        Number of particles P (>= 1).
+        Number of particles P (>= 1). 100 here; ``firefleet slam`` runs
+        :func:`default_n_particles` (300 with given association).
     version : {1, 2}
         FastSLAM 1.0 (motion-model proposal) or 2.0 (proposal with the observations).
     association : {"known", "unknown"}
