@@ -18,8 +18,9 @@ own map of independent landmark Kalman filters (Montemerlo et al. 2002, 2003).
   (Montemerlo 2003, sec. 5.1.3, negative evidence): spurious detections leave no
   landmark behind.
 
-- Odometry calibration (on by default; a prior sigma of 0 turns it off): each particle also carries the two systematic errors
-  of differential-drive odometry (Borenstein and Feng 1996), a heading drift per metre
+- Odometry calibration (on by default; a prior sigma of 0 turns it off): each particle
+  also carries the two systematic errors of differential-drive odometry (Borenstein and
+  Feng 1996), a heading drift per metre
   and a turn scale error, drawn from a prior at the start and kept through resampling,
   so that the particles whose calibration explains the observations survive. White
   per-step noise cannot follow a bias that adds up over kilometres (Victoria Park's
