@@ -20,13 +20,13 @@ own map of independent landmark Kalman filters (Montemerlo et al. 2002, 2003).
 
 - Odometry calibration (on by default; a prior sigma of 0 turns it off): each particle
   also carries the two systematic errors of differential-drive odometry (Borenstein and
-  Feng 1996), a heading drift per metre
-  and a turn scale error, drawn from a prior at the start and kept through resampling,
-  so that the particles whose calibration explains the observations survive. White
-  per-step noise cannot follow a bias that adds up over kilometres (Victoria Park's
-  odometry under-reports its heading by about 0.0018 rad per metre). The defaults
-  (priors 0.003 rad/m and 0.05, the log's odometry sigmas x 2) are right for that real
-  odometry and no worse on the simulated loop.
+  Feng 1996), a heading drift per metre and a turn scale error, drawn from a prior at
+  the start and kept through resampling, so that the particles whose calibration
+  explains the observations survive. White per-step noise cannot follow a bias that adds
+  up over kilometres (Victoria Park's odometry under-reports its heading by about 0.0018
+  rad per metre). The defaults (priors 0.003 rad/m and 0.05, the log's odometry sigmas
+  x 2) are set for such real odometry; on the simulated loop, whose odometry is
+  unbiased, they lower the median error and widen the spread a little.
 
 State layout (the hot path loops over the observations of a step, never over
 particles): poses ``(P, 3)``, log weights ``(P,)``, landmark means ``(P, C, 2)``,
