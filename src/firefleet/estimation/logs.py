@@ -72,6 +72,9 @@ _FIELDS = {
     "TRUTH_LANDMARK": 3,
     FORMAT_TAG: 1,
 }
+MAX_ABS_VALUE = 1e12
+"""Largest magnitude of a number in a log (metres, radians, their variances, seconds):
+the filter squares and multiplies them, and 1e308 would overflow to inf silently."""
 _INT_FIELDS = {"ODOMETRY": 2, "LANDMARK": 2, "BR": 2, "TRUTH_POSE": 1, "TRUTH_LANDMARK": 1}
 
 
@@ -257,6 +260,12 @@ def parse_log(lines: Iterable[str], *, name: str = "<log>") -> SlamLog:
             raise InputError(f"{where}: {tag} has a field that is not a number: {text!r}") from None
         if not all(math.isfinite(v) for v in nums):
             raise InputError(f"{where}: {tag} has a non-finite number: {text!r}")
+        big = next((k for k, v in enumerate(nums) if abs(v) > MAX_ABS_VALUE), None)
+        if big is not None:
+            raise InputError(
+                f"{where}: {tag} field {1 + n_int + big} is {words[1 + n_int + big]}: beyond "
+                f"{MAX_ABS_VALUE:g}, not a measurement (its squares would overflow)"
+            )
         if tag == FORMAT_TAG:
             if int(nums[0]) != FORMAT_VERSION:
                 raise InputError(f"{where}: unsupported {FORMAT_TAG} version {words[1]}")
