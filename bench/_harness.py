@@ -53,12 +53,15 @@ __all__ = [
     "baseline_document",
     "best_of",
     "best_of_interleaved",
+    "collect_floors",
     "compare",
     "comparison_table",
     "floors_table",
     "load_baseline",
     "machine_info",
+    "machine_line",
     "max_rss_bytes",
+    "regression_summary",
     "regressions",
     "single_threaded_blas",
     "traced_peak_bytes",
@@ -376,6 +379,50 @@ def regressions(
 ) -> list[Comparison]:
     """The speed rows more than ``tolerance`` slower than their baseline."""
     return [c for c in comparisons if c.regressed(tolerance)]
+
+
+def collect_floors(
+    required: Iterable[tuple[str, Op, float]],
+    results: Mapping[str, TopicResult],
+    source: str,
+) -> list[tuple[str, Floor]]:
+    """``(source, floor)`` pairs: the ``required`` floors first, then every topic's own.
+
+    ``required`` holds ``(row key, op, bound)``, checked on the row of that key (a key no
+    topic measured is skipped); a topic floor that repeats one of them is not listed twice.
+    """
+    rows = {r.key: r for res in results.values() for r in res.rows}
+    first = [Floor.on(rows[k], op, b) for k, op, b in required if k in rows]
+    seen = {(f.key, f.op, f.bound) for f in first}
+    return [(source, f) for f in first] + [
+        (name, f)
+        for name, res in results.items()
+        for f in res.floors
+        if f.key is None or (f.key, f.op, f.bound) not in seen
+    ]
+
+
+def regression_summary(
+    comparisons: list[Comparison], measured: Iterable[str], baseline: Mapping[str, Row]
+) -> str:
+    """One line: how many speed rows regressed, which, and which rows have no baseline."""
+    slow = regressions(comparisons)
+    n_speed = sum(c.row.kind == "speed" for c in comparisons)
+    text = f"{len(slow)} of {n_speed} speed rows more than {REGRESSION_TOLERANCE:.0%} slower"
+    if slow:
+        text += f" ({', '.join(c.row.key for c in slow)}: re-run them to tell noise)"
+    new = sorted(set(measured) - set(baseline))
+    return text + (f"; no baseline for {', '.join(new)}" if new else "") + "."
+
+
+def machine_line(info: Mapping[str, Any]) -> str:
+    """The machine information on one line."""
+    versions = ", ".join(f"{k} {v}" for k, v in info["versions"].items() if v)
+    return (
+        f"{info['cpu']}, {info['cores_available']} of {info['cores_total']} cores, "
+        f"load {info['load_average_1_5_15']}, {info['python']}, {versions}, "
+        f"BLAS threads {info['blas_threads_env']}"
+    )
 
 
 # ------------------------------------------------------------------------- tables

@@ -380,7 +380,7 @@ def print_peer_tables(console: Console, peer: dict[str, Any]) -> None:
         ("python-control nlsys+interconnect, input_output_response (RK45 defaults)", "peer_timing"),
         ("firefleet, same loop (ideal encoder, window 1, kd = 0)", "ours"),
         (
-            "firefleet, motor-pid as built in (2048-count encoder, PID)  (info)",
+            "firefleet, motor-pid as built in (2048-count encoder, PID) (info)",
             "builtin_motor_pid_n1",
         ),
     ):
