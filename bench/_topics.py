@@ -177,7 +177,7 @@ def stereo(d: Mapping[str, Any]) -> TopicResult:
 def slam(d: Mapping[str, Any]) -> TopicResult:
     """bench/slam.py: Victoria Park run time per configuration, FastSLAM 1.0 steps/s."""
     rows = []
-    for c in d["victoria_park"]["configs"]:
+    for c in d["victoria_park"].get("configs", []):  # none when the data set is absent
         rows.append(
             Row(
                 f"slam.victoria_park.{slug(c['name'])}_p{c['particles']}.best_run_s",

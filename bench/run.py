@@ -5,7 +5,8 @@ its rows, floors and details (``_harness.TopicResult``; ``_topics`` reads the to
 still return a dict). This driver then prints one table of floors (issue 12's five
 first, then every topic's own), writes the results file (default ``bench/results.json``)
 and prints every row against ``bench/baseline.json``, flagging a speed row more than
-10 % slower. The exit status is 0 whatever the floors say: this is a measurement.
+10 % slower. The exit status is 0 whatever the floors say (this is a measurement), 1
+when a topic failed to run (the others still run and are written).
 
     python bench/run.py [--only motor,fuzzy] [--out FILE] [--baseline FILE]
                         [--write-baseline FILE]
@@ -60,12 +61,17 @@ def main(argv: list[str] | None = None) -> int:
 
     console = Console(width=None if sys.stdout.isatty() else 130)
     start = time.perf_counter()
-    machine = h.machine_info()
-    console.print(f"[bold]firefleet bench[/] at {git_commit()}: {h.machine_line(machine)}")
+    machine, commit = h.machine_info(), git_commit()
+    console.print(f"[bold]firefleet bench[/] at {commit}: {h.machine_line(machine)}")
     results: dict[str, h.TopicResult] = {}
+    failed: dict[str, str] = {}
     for name in topics:
         console.rule(f"bench/{name}.py")
-        results[name] = topic_result(name, importlib.import_module(name).run(console))
+        try:  # one broken topic must not lose the others' numbers
+            results[name] = topic_result(name, importlib.import_module(name).run(console))
+        except Exception as exc:  # reported below and in the exit status
+            failed[name] = f"{type(exc).__name__}: {exc}"
+            console.print_exception()
 
     rows = {r.key: r for res in results.values() for r in res.rows}
     floors = h.collect_floors(ISSUE_12, results, "issue 12")
@@ -78,24 +84,26 @@ def main(argv: list[str] | None = None) -> int:
         title = f"Rows against {args.baseline.name} (slowdown > 1: slower or bigger than then)"
         console.print(h.comparison_table(comparisons, title))
         console.print(h.regression_summary(comparisons, rows, base))
+    for name, why in failed.items():
+        console.print(f"[bold red]bench/{name}.py failed[/]: {why} (no rows, no floors)")
     total = time.perf_counter() - start
     document = {
-        "commit": git_commit(),
+        "commit": commit,
         "machine": machine,
+        "load_average_at_end": h.machine_info()["load_average_1_5_15"],
         "bench_wall_time_s": total,
         "process_max_rss_mb": h.max_rss_bytes() / 1e6,
         "floors": [{"source": s, **f.to_dict()} for s, f in floors],
         "regressions": [c.row.key for c in h.regressions(comparisons)],
         "slowdown_vs_baseline": {c.row.key: c.slowdown for c in comparisons},
         "topics": {name: res.to_dict() for name, res in results.items()},
+        "failed_topics": failed,
     }
     h.write_results(args.out, document)
     if args.write_baseline:
-        h.write_results(
-            args.write_baseline, h.baseline_document(rows.values(), machine, git_commit())
-        )
+        h.write_results(args.write_baseline, h.baseline_document(rows.values(), machine, commit))
     console.print(f"wrote {args.out} (bench took {total:.1f} s)")
-    return 0
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

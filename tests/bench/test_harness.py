@@ -151,3 +151,21 @@ def test_a_topic_dict_is_read_into_rows_and_floors() -> None:
     assert topic_result("anything", res) is res
     with pytest.raises(TypeError, match=r"bench/thermal\.py returned list"):
         topic_result("thermal", [])
+
+
+def test_slam_without_victoria_park_has_scaling_rows_only() -> None:
+    returned = {
+        "victoria_park": {"skipped": True},
+        "scaling": [
+            {"particles": 100, "landmarks": 10, "steps_per_s": 8207.7, "step_peak_mb": 0.07}
+        ],
+        "floors": [{"name": "f", "required": "< 60.0 s", "measured": "6.28 s", "pass": True}],
+    }
+    res = topic_result("slam", returned)
+    assert [r.key for r in res.rows] == [
+        "slam.scaling.p100_l10.steps_per_s",
+        "slam.scaling.p100_l10.step_peak_mb",
+    ]
+    assert [(f.op, f.bound, f.measured, f.unit, f.passed) for f in res.floors] == [
+        ("<", 60.0, 6.28, "s", True)
+    ]
