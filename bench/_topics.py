@@ -36,12 +36,28 @@ def parse_bound(text: str) -> tuple[Op | None, float, str]:
 
 
 def _text_floors(floors: list[dict[str, Any]]) -> list[Floor]:
-    """Floors written as text (``"required": ">= 30 %"``, ``"measured": "32.3 %"``)."""
+    """Floors written as text (``"required": ">= 30 %"``, ``"measured": "32.3 %"``).
+
+    ``"required": "no worse"`` with ``"measured": "0.264 vs 0.690 m"`` is ours <= theirs;
+    any other wording keeps the topic's own verdict (measured 1 if it passed, else 0).
+    """
     out = []
     for f in floors:
-        op, bound, unit = parse_bound(f["required"])
-        _, measured, _ = parse_bound(f["measured"])
-        out.append(Floor(f["name"], measured, bound, unit, op or ">="))
+        try:
+            op, bound, unit = parse_bound(f["required"])
+            _, measured, _ = parse_bound(f["measured"])
+            out.append(Floor(f["name"], measured, bound, unit, op or ">="))
+            continue
+        except ValueError:
+            pass
+        ours, _, theirs = str(f["measured"]).partition(" vs ")
+        if f["required"] == "no worse" and theirs:
+            _, a, _ = parse_bound(ours)
+            _, b, unit = parse_bound(theirs)
+            out.append(Floor(f["name"], a, b, unit, "<="))
+        else:
+            name = f"{f['name']} ({f['required']}: {f['measured']})"
+            out.append(Floor(name, float(bool(f["pass"])), 1.0, "pass", ">="))
     return out
 
 

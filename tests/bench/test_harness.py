@@ -169,3 +169,20 @@ def test_slam_without_victoria_park_has_scaling_rows_only() -> None:
     assert [(f.op, f.bound, f.measured, f.unit, f.passed) for f in res.floors] == [
         ("<", 60.0, 6.28, "s", True)
     ]
+
+
+def test_text_floors_in_other_words_keep_their_verdict() -> None:
+    returned = {
+        "victoria_park": {"skipped": True},
+        "scaling": [],
+        "floors": [
+            {"name": "error", "required": "no worse", "measured": "0.264 vs 0.690 m", "pass": True},
+            {"name": "odd", "required": "as good", "measured": "yes", "pass": False},
+        ],
+    }
+    floors = topic_result("slam", returned).floors
+    assert [(f.measured, f.op, f.bound, f.unit, f.passed) for f in floors] == [
+        (0.264, "<=", 0.690, "m", True),
+        (0.0, ">=", 1.0, "pass", False),
+    ]
+    assert floors[1].name == "odd (as good: yes)"
