@@ -50,6 +50,7 @@ from rich.console import Console
 from rich.table import Table
 from skfuzzy import control as skctrl
 
+from _harness import Floor, Row, TopicResult, best_of
 from firefleet.control.fuzzy import (
     FuzzyInput,
     FuzzyOutput,
@@ -236,17 +237,6 @@ def samples(n: int, seed: int) -> FloatArray:
     )
 
 
-def best_of(fn: Callable[[], object], repeats: int) -> float:
-    """Best wall time [s] of ``repeats`` calls after one untimed call."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
-
-
 def peer_one(sim: Any, x: FloatArray) -> tuple[float, float]:
     sim.input["D_rp"] = x[0]
     sim.input["x_err"] = x[1]
@@ -306,29 +296,29 @@ def verdict(ok: bool) -> str:
     return "[bold green]PASS[/]" if ok else "[bold red]FAIL[/]"
 
 
-def run(console: Console) -> dict[str, Any]:
-    """Measure, print the tables, return every number (JSON-able)."""
+def run(console: Console) -> TopicResult:
+    """Measure, print the tables, return the rows, the floors and every number."""
     system = our_system()
     control_system = peer_system()
     single_x = samples(SINGLE_SAMPLES, 1)
     peer_x = samples(PEER_SINGLE_SAMPLES, 2)
     batch_x = samples(BATCH, 3)
-    rows = list(single_x)
+    single_rows = list(single_x)
 
     console.print(f"  firefleet one at a time ({SINGLE_SAMPLES} samples x {REPEATS}) ...")
 
     def ours_single() -> None:
-        for row in rows:
+        for row in single_rows:
             evaluate(system, row)
 
-    ours_single_s = best_of(ours_single, REPEATS) / SINGLE_SAMPLES
+    ours_single_s = best_of(ours_single, REPEATS).best_s / SINGLE_SAMPLES
     console.print(f"  firefleet batches of {BATCH:,} ({REPEATS} runs) ...")
-    ours_batch_s = best_of(lambda: evaluate(system, batch_x), REPEATS) / BATCH
+    ours_batch_s = best_of(lambda: evaluate(system, batch_x), REPEATS).best_s / BATCH
     console.print(f"  firefleet compiled eval_one loop ({KERNEL_SAMPLES:,} samples) ...")
     tables = compile_system(system)
     kernel_x = samples(KERNEL_SAMPLES, 4)
     kernel_out = np.empty((KERNEL_SAMPLES, len(system.outputs)))
-    kernel_s = best_of(lambda: _kernel_loop(kernel_x, tables, kernel_out), REPEATS)
+    kernel_s = best_of(lambda: _kernel_loop(kernel_x, tables, kernel_out), REPEATS).best_s
     kernel_s /= KERNEL_SAMPLES
     kernel_ok = bool(np.array_equal(kernel_out[:BATCH], evaluate(system, kernel_x[:BATCH])))
 
@@ -342,7 +332,7 @@ def run(console: Console) -> dict[str, Any]:
         for row in peer_rows:
             peer_one(sim, row)
 
-    peer_single_s = best_of(peer_single, PEER_REPEATS) / PEER_SINGLE_SAMPLES
+    peer_single_s = best_of(peer_single, PEER_REPEATS).best_s / PEER_SINGLE_SAMPLES
 
     console.print(f"  scikit-fuzzy array mode, {BATCH:,} samples (one timed run) ...")
 
@@ -384,37 +374,45 @@ def run(console: Console) -> dict[str, Any]:
     ):
         table.add_row(who, mode, f"{1 / sec:,.0f}", f"{sec * 1e6:,.3f}")
     console.print(table)
-    floors: list[dict[str, Any]] = [
-        {
-            "name": "one at a time: scikit-fuzzy time / firefleet time",
-            "required": FLOOR_SINGLE,
-            "measured": ratio_single,
-            "pass": ratio_single >= FLOOR_SINGLE,
-        },
-        {
-            "name": f"batches of {BATCH:,}: scikit-fuzzy (one at a time) / firefleet, per sample",
-            "required": FLOOR_BATCH,
-            "measured": ratio_batch,
-            "pass": ratio_batch >= FLOOR_BATCH,
-        },
-        {
-            "name": "fuzzy controller one at a time (public API): evaluations/s",
-            "required": FLOOR_SINGLE_PER_S,
-            "measured": 1 / ours_single_s,
-            "pass": 1 / ours_single_s >= FLOOR_SINGLE_PER_S,
-            "unit": "/s",
-        },
-    ]
+    rows = (
+        Row(
+            "fuzzy.single.evals_per_s",
+            1 / ours_single_s,
+            "evals/s",
+            label="fuzzy controller one at a time (public API): evaluations per second",
+        ),
+        Row(
+            "fuzzy.batch10000.evals_per_s",
+            1 / ours_batch_s,
+            "evals/s",
+            label=f"fuzzy controller, batches of {BATCH:,}: evaluations per second",
+        ),
+        Row(
+            "fuzzy.kernel.evals_per_s",
+            1 / kernel_s,
+            "evals/s",
+            label="fuzzy eval_one in a compiled loop (as the simulator calls it): evaluations/s",
+        ),
+    )
+    floors = (
+        Floor("one at a time: scikit-fuzzy time / firefleet time", ratio_single, FLOOR_SINGLE, "x"),
+        Floor(
+            f"batches of {BATCH:,}: scikit-fuzzy (one at a time) / firefleet, per sample",
+            ratio_batch,
+            FLOOR_BATCH,
+            "x",
+        ),
+        Floor.on(rows[0], ">=", FLOOR_SINGLE_PER_S),
+    )
     ftable = Table(title="Fuzzy floors (a measurement: exit status 0 either way)")
     for col in ("floor", "required", "measured", "verdict"):
         ftable.add_column(col, justify="right" if col in ("required", "measured") else "left")
     for f in floors:
-        unit = f.get("unit", "x")
         ftable.add_row(
-            f["name"],
-            f">= {f['required']:,.0f}{unit}",
-            f"{f['measured']:,.0f}{unit}",
-            verdict(f["pass"]),
+            f.name,
+            f"{f.op} {f.bound:,.0f} {f.unit}",
+            f"{f.measured:,.0f} {f.unit}",
+            verdict(f.passed),
         )
     console.print(ftable)
     console.print(
@@ -428,7 +426,7 @@ def run(console: Console) -> dict[str, Any]:
         "methods, not expected to agree exactly); firefleet's single and batch paths agree "
         f"to 1e-12: {single_ok}; eval_one equals evaluate bit for bit: {kernel_ok}."
     )
-    return {
+    details = {
         "controller": {"inputs": {k: len(v) for k, v in INPUT_MFS.items()}, "rules": len(TABLE_1)},
         "ours_single_s_per_eval": ours_single_s,
         "ours_batch_s_per_eval": ours_batch_s,
@@ -449,9 +447,9 @@ def run(console: Console) -> dict[str, Any]:
         "output_diff_omega_median": float(np.median(diff_w)),
         "output_diff_omega_max": float(diff_w.max()),
         "single_equals_batch": bool(single_ok),
-        "floors": floors,
         "versions": {"numpy": np.__version__, "scikit-fuzzy": skfuzzy.__version__},
     }
+    return TopicResult(rows, floors, details)
 
 
 if __name__ == "__main__":

@@ -322,7 +322,7 @@ def _unpack(fb: FloatArray, ib: IntArray) -> tuple[Any, ...]:  # pragma: no cove
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def eval_packed(x: FloatArray, fb: FloatArray, ib: IntArray, out: FloatArray) -> bool:
     """One sample ``x`` (n_in,) into ``out`` (n_out,); False (nothing written) if ``x``
     holds a non-finite value. ``fb``, ``ib``: :class:`PackedTables` buffers."""
@@ -335,7 +335,7 @@ def eval_packed(x: FloatArray, fb: FloatArray, ib: IntArray, out: FloatArray) ->
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def eval_rows(x: FloatArray, fb: FloatArray, ib: IntArray, out: FloatArray) -> int:
     """A batch ``x`` (N, n_in) into ``out`` (N, n_out), row after row with :func:`eval_one`.
 

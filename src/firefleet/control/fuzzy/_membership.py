@@ -86,7 +86,7 @@ def check_mf_params(kind: str, params: Sequence[float], where: str) -> tuple[flo
     return values
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def mf_value(
     kind: int, a: float, b: float, c: float, d: float, x: float
 ) -> float:  # pragma: no cover
