@@ -62,10 +62,238 @@ the result is the same bit for bit); smaller ones on one, where threads cost mor
 they bring."""
 
 
+@numba.njit(cache=True)
+def _path_following_robot(
+    i: int,
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    points: FloatArray,
+    spacing: FloatArray,
+    period: float,
+    pose: FloatArray,
+    odom: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    load: FloatArray,
+    cpr: float,
+    done: FloatArray,
+    m_kind: IntArray,
+    m_par: FloatArray,
+    m_in: IntArray,
+    m_range: FloatArray,
+    m_rmf: IntArray,
+    m_rnot: NDArray[np.bool_],
+    m_rw: FloatArray,
+    m_ror: NDArray[np.bool_],
+    m_rout: IntArray,
+    m_coef: FloatArray,
+    m_mid: FloatArray,
+    m_flags: IntArray,
+    l_kind: IntArray,
+    l_par: FloatArray,
+    l_in: IntArray,
+    l_range: FloatArray,
+    l_rmf: IntArray,
+    l_rnot: NDArray[np.bool_],
+    l_rw: FloatArray,
+    l_ror: NDArray[np.bool_],
+    l_rout: IntArray,
+    l_coef: FloatArray,
+    l_mid: FloatArray,
+    l_flags: IntArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    odom_rec: FloatArray,
+    wheel_rec: FloatArray,
+    ctl_rec: FloatArray,
+    desired_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """Robot ``i`` of :func:`path_following_chunk` through its steps ``k0 <= k < k1``."""
+    pieces = points.shape[1] - 1
+    r, axle = geom[0], geom[1]
+    coef = (
+        motor[0],
+        motor[1],
+        motor[2],
+        motor[3],
+        motor[4],
+        motor[5],
+        motor[6],
+        motor[7],
+        motor[8],
+        motor[9],
+        motor[10],
+        motor[11],
+    )
+    gains = (pid[0], pid[1], pid[2], pid[3], pid[4], pid[5], pid[6])
+    per_rad = cpr / (2.0 * math.pi) if cpr > 0 else 0.0
+    window = history.shape[2] - 1
+    count_rad = 2.0 * math.pi / cpr if cpr > 0 else 1.0
+    per_count = count_rad / (window * dt)
+    tau_on, t_load = load[0], load[1] - 1e-9
+    work = np.empty(64 + m_kind.shape[0] + l_kind.shape[0])
+    x_main = np.empty(3)
+    y_main = np.empty(2)
+    x_lam = np.empty(1)
+    y_lam = np.empty(1)
+    x_end, y_end, h_end = points[i, pieces, 0], points[i, pieces, 1], points[i, pieces, 2]
+    cos_end, sin_end = math.cos(h_end), math.sin(h_end)
+    # the robot's state, in registers for the chunk
+    px, py, pth = pose[i, 0], pose[i, 1], pose[i, 2]
+    ox, oy, oth = odom[i, 0], odom[i, 1], odom[i, 2]
+    cur_r, spd_r, ang_r, meas_r = wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3]
+    int_r, der_r, last_r, cnt_r = wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6], wheel[i, 0, 7]
+    cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
+    int_l, der_l, last_l, cnt_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6], wheel[i, 1, 7]
+    stopped = done[i] > 0.0
+    j_trig = -1  # the index whose heading's cos and sin are held
+    cos_d, sin_d = 1.0, 0.0
+    for k in range(k0, k1):
+        t = k * dt
+        j = math.floor(t / period + 1e-9) + 1
+        tau = tau_on if t >= t_load else 0.0
+        row = rec_index[k]
+        # --- high level: the fuzzy controller on the odometry pose (eqs. 9-11)
+        if j <= pieces:
+            xd, yd, hd = points[i, j, 0], points[i, j, 1], points[i, j, 2]
+            if j != j_trig:
+                cos_d, sin_d = math.cos(hd), math.sin(hd)
+                j_trig = j
+        else:  # past the end: on along the end tangent, at the same pace
+            beyond = (j - pieces) * spacing[i]
+            xd = x_end + beyond * cos_end
+            yd = y_end + beyond * sin_end
+            cos_d, sin_d = cos_end, sin_end
+            j_trig = -1
+        dx = xd - ox
+        dy = yd - oy
+        d_rp = math.sqrt(dx * dx + dy * dy)
+        x_err = dx * cos_d + dy * sin_d
+        y_err = -math.sin(oth) * dx + math.cos(oth) * dy
+        alpha = wrap_angle_one(math.atan2(dy, dx) - oth) if d_rp > 0.0 else 0.0
+        x_lam[0] = y_err
+        eval_one(
+            x_lam,
+            l_kind,
+            l_par,
+            l_in,
+            l_range,
+            l_rmf,
+            l_rnot,
+            l_rw,
+            l_ror,
+            l_rout,
+            l_coef,
+            l_mid,
+            l_flags,
+            y_lam,
+            work,
+        )
+        lam_deg = y_lam[0]
+        x_main[0] = d_rp
+        x_main[1] = x_err
+        x_main[2] = min(max(math.degrees(alpha) + lam_deg, -180.0), 180.0)
+        eval_one(
+            x_main,
+            m_kind,
+            m_par,
+            m_in,
+            m_range,
+            m_rmf,
+            m_rnot,
+            m_rw,
+            m_ror,
+            m_rout,
+            m_coef,
+            m_mid,
+            m_flags,
+            y_main,
+            work,
+        )
+        past_end = (x_end - ox) * cos_end + (y_end - oy) * sin_end
+        if j >= pieces and past_end <= 0.0:
+            stopped = True
+        v = 0.0 if stopped else y_main[0]
+        omega = 0.0 if stopped else math.radians(y_main[1])
+        ref_r = (v + 0.5 * axle * omega) / r
+        ref_l = (v - 0.5 * axle * omega) / r
+        # --- low level: the wheel-speed PIDs
+        int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref_r, meas_r, gains, dt)
+        last_r = meas_r
+        int_l, der_l, volt_l = pid_step_one(int_l, der_l, last_l, ref_l, meas_l, gains, dt)
+        last_l = meas_l
+        if row >= 0:
+            pose_rec[row, i, 0] = px
+            pose_rec[row, i, 1] = py
+            pose_rec[row, i, 2] = pth
+            odom_rec[row, i, 0] = ox
+            odom_rec[row, i, 1] = oy
+            odom_rec[row, i, 2] = oth
+            wheel_rec[row, i, 0, 0] = spd_r
+            wheel_rec[row, i, 0, 1] = meas_r
+            wheel_rec[row, i, 0, 2] = ref_r
+            wheel_rec[row, i, 0, 3] = cur_r
+            wheel_rec[row, i, 0, 4] = volt_r
+            wheel_rec[row, i, 0, 5] = tau
+            wheel_rec[row, i, 1, 0] = spd_l
+            wheel_rec[row, i, 1, 1] = meas_l
+            wheel_rec[row, i, 1, 2] = ref_l
+            wheel_rec[row, i, 1, 3] = cur_l
+            wheel_rec[row, i, 1, 4] = volt_l
+            wheel_rec[row, i, 1, 5] = tau
+            ctl_rec[row, i, 0] = v
+            ctl_rec[row, i, 1] = omega
+            ctl_rec[row, i, 2] = d_rp
+            ctl_rec[row, i, 3] = x_err
+            ctl_rec[row, i, 4] = y_err
+            ctl_rec[row, i, 5] = alpha
+            ctl_rec[row, i, 6] = math.radians(lam_deg)
+            ctl_rec[row, i, 7] = j
+            desired_rec[row, i, 0] = xd
+            desired_rec[row, i, 1] = yd
+        if k == n_steps:
+            continue
+        # --- plant: motors (exact ZOH), true pose, encoders, odometry
+        cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau, coef)
+        cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau, coef)
+        ang_r, count_r, meas_r = encoder_step_one(
+            ang_r, dphi_r, history[i, 0, 1], per_rad, per_count
+        )
+        ang_l, count_l, meas_l = encoder_step_one(
+            ang_l, dphi_l, history[i, 1, 1], per_rad, per_count
+        )
+        for h in range(window):
+            history[i, 0, h] = history[i, 0, h + 1]
+            history[i, 1, h] = history[i, 1, h + 1]
+        history[i, 0, window] = count_r
+        history[i, 1, window] = count_l
+        px, py, pth = diff_drive_step_one(px, py, pth, dphi_r, dphi_l, r, axle)
+        ox, oy, oth = diff_drive_step_one(
+            ox, oy, oth, (count_r - cnt_r) * count_rad, (count_l - cnt_l) * count_rad, r, axle
+        )
+        cnt_r, cnt_l = count_r, count_l
+    pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
+    odom[i, 0], odom[i, 1], odom[i, 2] = ox, oy, oth
+    wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
+    wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6], wheel[i, 0, 7] = int_r, der_r, last_r, cnt_r
+    wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
+    wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6], wheel[i, 1, 7] = int_l, der_l, last_l, cnt_l
+    if stopped:
+        done[i] = 1.0
+
+
 # The two fuzzy systems come in as their FisTables fields, flat: passed as NamedTuples
 # the kernel measured 30 % slower, the fields' arrays then reached through the tuple on
-# every access.
-def _path_following_chunk_py(
+# every access. The serial and the parallel kernel are two functions (not one function
+# compiled twice): numba's cache keys an entry on the function's name and line, not on
+# parallel=True, so one function compiled both ways would load the other's code.
+@numba.njit(cache=True)
+def path_following_chunk(
     k0: int,
     k1: int,
     n_steps: int,
@@ -161,9 +389,193 @@ def _path_following_chunk_py(
         ``sim.cooperative.CONTROL_SERIES``.
     desired_rec : ndarray, shape (T, N, 2)
     """
-    n = pose.shape[0]
-    pieces = points.shape[1] - 1
-    r, axle = geom[0], geom[1]
+    for i in range(pose.shape[0]):  # robots are independent
+        _path_following_robot(
+            i,
+            k0,
+            k1,
+            n_steps,
+            dt,
+            points,
+            spacing,
+            period,
+            pose,
+            odom,
+            wheel,
+            history,
+            motor,
+            pid,
+            geom,
+            load,
+            cpr,
+            done,
+            m_kind,
+            m_par,
+            m_in,
+            m_range,
+            m_rmf,
+            m_rnot,
+            m_rw,
+            m_ror,
+            m_rout,
+            m_coef,
+            m_mid,
+            m_flags,
+            l_kind,
+            l_par,
+            l_in,
+            l_range,
+            l_rmf,
+            l_rnot,
+            l_rw,
+            l_ror,
+            l_rout,
+            l_coef,
+            l_mid,
+            l_flags,
+            rec_index,
+            pose_rec,
+            odom_rec,
+            wheel_rec,
+            ctl_rec,
+            desired_rec,
+        )
+
+
+@numba.njit(cache=True, parallel=True)
+def path_following_chunk_parallel(
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    points: FloatArray,
+    spacing: FloatArray,
+    period: float,
+    pose: FloatArray,
+    odom: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    load: FloatArray,
+    cpr: float,
+    done: FloatArray,
+    m_kind: IntArray,
+    m_par: FloatArray,
+    m_in: IntArray,
+    m_range: FloatArray,
+    m_rmf: IntArray,
+    m_rnot: NDArray[np.bool_],
+    m_rw: FloatArray,
+    m_ror: NDArray[np.bool_],
+    m_rout: IntArray,
+    m_coef: FloatArray,
+    m_mid: FloatArray,
+    m_flags: IntArray,
+    l_kind: IntArray,
+    l_par: FloatArray,
+    l_in: IntArray,
+    l_range: FloatArray,
+    l_rmf: IntArray,
+    l_rnot: NDArray[np.bool_],
+    l_rw: FloatArray,
+    l_ror: NDArray[np.bool_],
+    l_rout: IntArray,
+    l_coef: FloatArray,
+    l_mid: FloatArray,
+    l_flags: IntArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    odom_rec: FloatArray,
+    wheel_rec: FloatArray,
+    ctl_rec: FloatArray,
+    desired_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`path_following_chunk` with the robots spread over every core (the same
+    result bit for bit)."""
+    for i in numba.prange(pose.shape[0]):  # robots are independent
+        _path_following_robot(
+            i,
+            k0,
+            k1,
+            n_steps,
+            dt,
+            points,
+            spacing,
+            period,
+            pose,
+            odom,
+            wheel,
+            history,
+            motor,
+            pid,
+            geom,
+            load,
+            cpr,
+            done,
+            m_kind,
+            m_par,
+            m_in,
+            m_range,
+            m_rmf,
+            m_rnot,
+            m_rw,
+            m_ror,
+            m_rout,
+            m_coef,
+            m_mid,
+            m_flags,
+            l_kind,
+            l_par,
+            l_in,
+            l_range,
+            l_rmf,
+            l_rnot,
+            l_rw,
+            l_ror,
+            l_rout,
+            l_coef,
+            l_mid,
+            l_flags,
+            rec_index,
+            pose_rec,
+            odom_rec,
+            wheel_rec,
+            ctl_rec,
+            desired_rec,
+        )
+
+
+MOTOR_RECORD = ("speed", "measured", "ref", "current", "voltage", "load")
+"""Wheel quantities :func:`motor_team_chunk` records, in the last axis of ``wheel_rec``:
+true speed [rad/s], measured speed [rad/s], reference [rad/s] (NaN in open loop),
+current [A], voltage [V], load torque [N m]."""
+
+
+@numba.njit(cache=True)
+def _motor_team_robot(
+    i: int,
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    command: FloatArray,
+    pose: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    encoder: FloatArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    wheel_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """Robot ``i`` of :func:`motor_team_chunk` through its steps ``k0 <= k < k1``."""
+    open_loop = command[0] > 0.0
+    level_on, level_start = command[1], command[2] - 1e-9
+    load_on, load_start = command[3], command[4] - 1e-9
     coef = (
         motor[0],
         motor[1],
@@ -179,177 +591,72 @@ def _path_following_chunk_py(
         motor[11],
     )
     gains = (pid[0], pid[1], pid[2], pid[3], pid[4], pid[5], pid[6])
-    per_rad = cpr / (2.0 * math.pi) if cpr > 0 else 0.0
+    scale_r, scale_l, radius, axle = geom[0], geom[1], geom[2], geom[3]
+    per_rad, per_count = encoder[0], encoder[1]
     window = history.shape[2] - 1
-    count_rad = 2.0 * math.pi / cpr if cpr > 0 else 1.0
-    per_count = count_rad / (window * dt)
-    tau_on, t_load = load[0], load[1] - 1e-9
-    arrived = np.zeros(n, dtype=np.bool_)
-    for q in range(n):
-        arrived[q] = done[q] > 0.0
-    for i in numba.prange(n):  # robots are independent: each runs the whole chunk in turn
-        work = np.empty(64 + m_kind.shape[0] + l_kind.shape[0])
-        x_main = np.empty(3)
-        y_main = np.empty(2)
-        x_lam = np.empty(1)
-        y_lam = np.empty(1)
-        x_end, y_end, h_end = points[i, pieces, 0], points[i, pieces, 1], points[i, pieces, 2]
-        cos_end, sin_end = math.cos(h_end), math.sin(h_end)
-        # the robot's state, in registers for the chunk
-        px, py, pth = pose[i, 0], pose[i, 1], pose[i, 2]
-        ox, oy, oth = odom[i, 0], odom[i, 1], odom[i, 2]
-        cur_r, spd_r, ang_r, meas_r = wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3]
-        int_r, der_r, last_r, cnt_r = wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6], wheel[i, 0, 7]
-        cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
-        int_l, der_l, last_l, cnt_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6], wheel[i, 1, 7]
-        stopped = arrived[i]
-        j_trig = -1  # the index whose heading's cos and sin are held
-        cos_d, sin_d = 1.0, 0.0
-        for k in range(k0, k1):
-            t = k * dt
-            j = math.floor(t / period + 1e-9) + 1
-            tau = tau_on if t >= t_load else 0.0
-            row = rec_index[k]
-            # --- high level: the fuzzy controller on the odometry pose (eqs. 9-11)
-            if j <= pieces:
-                xd, yd, hd = points[i, j, 0], points[i, j, 1], points[i, j, 2]
-                if j != j_trig:
-                    cos_d, sin_d = math.cos(hd), math.sin(hd)
-                    j_trig = j
-            else:  # past the end: on along the end tangent, at the same pace
-                beyond = (j - pieces) * spacing[i]
-                xd = x_end + beyond * cos_end
-                yd = y_end + beyond * sin_end
-                cos_d, sin_d = cos_end, sin_end
-                j_trig = -1
-            dx = xd - ox
-            dy = yd - oy
-            d_rp = math.sqrt(dx * dx + dy * dy)
-            x_err = dx * cos_d + dy * sin_d
-            y_err = -math.sin(oth) * dx + math.cos(oth) * dy
-            alpha = wrap_angle_one(math.atan2(dy, dx) - oth) if d_rp > 0.0 else 0.0
-            x_lam[0] = y_err
-            eval_one(
-                x_lam,
-                l_kind,
-                l_par,
-                l_in,
-                l_range,
-                l_rmf,
-                l_rnot,
-                l_rw,
-                l_ror,
-                l_rout,
-                l_coef,
-                l_mid,
-                l_flags,
-                y_lam,
-                work,
-            )
-            lam_deg = y_lam[0]
-            x_main[0] = d_rp
-            x_main[1] = x_err
-            x_main[2] = min(max(math.degrees(alpha) + lam_deg, -180.0), 180.0)
-            eval_one(
-                x_main,
-                m_kind,
-                m_par,
-                m_in,
-                m_range,
-                m_rmf,
-                m_rnot,
-                m_rw,
-                m_ror,
-                m_rout,
-                m_coef,
-                m_mid,
-                m_flags,
-                y_main,
-                work,
-            )
-            past_end = (x_end - ox) * cos_end + (y_end - oy) * sin_end
-            if j >= pieces and past_end <= 0.0:
-                stopped = True
-            v = 0.0 if stopped else y_main[0]
-            omega = 0.0 if stopped else math.radians(y_main[1])
-            ref_r = (v + 0.5 * axle * omega) / r
-            ref_l = (v - 0.5 * axle * omega) / r
-            # --- low level: the wheel-speed PIDs
-            int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref_r, meas_r, gains, dt)
+    px, py, pth = pose[i, 0], pose[i, 1], pose[i, 2]
+    cur_r, spd_r, ang_r, meas_r = wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3]
+    int_r, der_r, last_r = wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6]
+    cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
+    int_l, der_l, last_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6]
+    for k in range(k0, k1):
+        t = k * dt
+        tau = load_on if t >= load_start else 0.0
+        level = level_on if t >= level_start else 0.0
+        if open_loop:
+            ref = math.nan
+            volt_r = level
+            volt_l = level
+        else:
+            ref = level
+            int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref, meas_r, gains, dt)
             last_r = meas_r
-            int_l, der_l, volt_l = pid_step_one(int_l, der_l, last_l, ref_l, meas_l, gains, dt)
+            int_l, der_l, volt_l = pid_step_one(int_l, der_l, last_l, ref, meas_l, gains, dt)
             last_l = meas_l
-            if row >= 0:
-                pose_rec[row, i, 0] = px
-                pose_rec[row, i, 1] = py
-                pose_rec[row, i, 2] = pth
-                odom_rec[row, i, 0] = ox
-                odom_rec[row, i, 1] = oy
-                odom_rec[row, i, 2] = oth
-                wheel_rec[row, i, 0, 0] = spd_r
-                wheel_rec[row, i, 0, 1] = meas_r
-                wheel_rec[row, i, 0, 2] = ref_r
-                wheel_rec[row, i, 0, 3] = cur_r
-                wheel_rec[row, i, 0, 4] = volt_r
-                wheel_rec[row, i, 0, 5] = tau
-                wheel_rec[row, i, 1, 0] = spd_l
-                wheel_rec[row, i, 1, 1] = meas_l
-                wheel_rec[row, i, 1, 2] = ref_l
-                wheel_rec[row, i, 1, 3] = cur_l
-                wheel_rec[row, i, 1, 4] = volt_l
-                wheel_rec[row, i, 1, 5] = tau
-                ctl_rec[row, i, 0] = v
-                ctl_rec[row, i, 1] = omega
-                ctl_rec[row, i, 2] = d_rp
-                ctl_rec[row, i, 3] = x_err
-                ctl_rec[row, i, 4] = y_err
-                ctl_rec[row, i, 5] = alpha
-                ctl_rec[row, i, 6] = math.radians(lam_deg)
-                ctl_rec[row, i, 7] = j
-                desired_rec[row, i, 0] = xd
-                desired_rec[row, i, 1] = yd
-            if k == n_steps:
-                continue
-            # --- plant: motors (exact ZOH), true pose, encoders, odometry
-            cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau, coef)
-            cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau, coef)
-            ang_r, count_r, meas_r = encoder_step_one(
-                ang_r, dphi_r, history[i, 0, 1], per_rad, per_count
-            )
-            ang_l, count_l, meas_l = encoder_step_one(
-                ang_l, dphi_l, history[i, 1, 1], per_rad, per_count
-            )
-            for h in range(window):
-                history[i, 0, h] = history[i, 0, h + 1]
-                history[i, 1, h] = history[i, 1, h + 1]
-            history[i, 0, window] = count_r
-            history[i, 1, window] = count_l
-            px, py, pth = diff_drive_step_one(px, py, pth, dphi_r, dphi_l, r, axle)
-            ox, oy, oth = diff_drive_step_one(
-                ox, oy, oth, (count_r - cnt_r) * count_rad, (count_l - cnt_l) * count_rad, r, axle
-            )
-            cnt_r, cnt_l = count_r, count_l
-        pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
-        odom[i, 0], odom[i, 1], odom[i, 2] = ox, oy, oth
-        wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
-        wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6], wheel[i, 0, 7] = int_r, der_r, last_r, cnt_r
-        wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
-        wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6], wheel[i, 1, 7] = int_l, der_l, last_l, cnt_l
-        if stopped:
-            done[i] = 1.0
+        row = rec_index[k]
+        if row >= 0:
+            pose_rec[row, i, 0] = px
+            pose_rec[row, i, 1] = py
+            pose_rec[row, i, 2] = pth
+            wheel_rec[row, i, 0, 0] = spd_r
+            wheel_rec[row, i, 0, 1] = meas_r
+            wheel_rec[row, i, 0, 2] = ref
+            wheel_rec[row, i, 0, 3] = cur_r
+            wheel_rec[row, i, 0, 4] = volt_r
+            wheel_rec[row, i, 0, 5] = tau
+            wheel_rec[row, i, 1, 0] = spd_l
+            wheel_rec[row, i, 1, 1] = meas_l
+            wheel_rec[row, i, 1, 2] = ref
+            wheel_rec[row, i, 1, 3] = cur_l
+            wheel_rec[row, i, 1, 4] = volt_l
+            wheel_rec[row, i, 1, 5] = tau
+        if k == n_steps:
+            continue
+        cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau, coef)
+        cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau, coef)
+        ang_r, count_r, meas_r = encoder_step_one(
+            ang_r, dphi_r, history[i, 0, 1], per_rad, per_count
+        )
+        ang_l, count_l, meas_l = encoder_step_one(
+            ang_l, dphi_l, history[i, 1, 1], per_rad, per_count
+        )
+        for h in range(window):
+            history[i, 0, h] = history[i, 0, h + 1]
+            history[i, 1, h] = history[i, 1, h + 1]
+        history[i, 0, window] = count_r
+        history[i, 1, window] = count_l
+        px, py, pth = diff_drive_step_one(
+            px, py, pth, dphi_r * scale_r, dphi_l * scale_l, radius, axle
+        )
+    pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
+    wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
+    wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6] = int_r, der_r, last_r
+    wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
+    wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6] = int_l, der_l, last_l
 
 
-path_following_chunk = numba.njit(cache=True)(_path_following_chunk_py)
-path_following_chunk_parallel = numba.njit(cache=True, parallel=True)(_path_following_chunk_py)
-
-
-MOTOR_RECORD = ("speed", "measured", "ref", "current", "voltage", "load")
-"""Wheel quantities :func:`motor_team_chunk` records, in the last axis of ``wheel_rec``:
-true speed [rad/s], measured speed [rad/s], reference [rad/s] (NaN in open loop),
-current [A], voltage [V], load torque [N m]."""
-
-
-def _motor_team_chunk_py(
+@numba.njit(cache=True)
+def motor_team_chunk(
     k0: int,
     k1: int,
     n_steps: int,
@@ -406,92 +713,66 @@ def _motor_team_chunk_py(
     wheel_rec : ndarray, shape (T, N, 2, 6)
         :data:`MOTOR_RECORD`.
     """
-    n = pose.shape[0]
-    open_loop = command[0] > 0.0
-    level_on, level_start = command[1], command[2] - 1e-9
-    load_on, load_start = command[3], command[4] - 1e-9
-    coef = (
-        motor[0],
-        motor[1],
-        motor[2],
-        motor[3],
-        motor[4],
-        motor[5],
-        motor[6],
-        motor[7],
-        motor[8],
-        motor[9],
-        motor[10],
-        motor[11],
-    )
-    gains = (pid[0], pid[1], pid[2], pid[3], pid[4], pid[5], pid[6])
-    scale_r, scale_l, radius, axle = geom[0], geom[1], geom[2], geom[3]
-    per_rad, per_count = encoder[0], encoder[1]
-    window = history.shape[2] - 1
-    for i in numba.prange(n):  # robots are independent: each runs the whole chunk in turn
-        px, py, pth = pose[i, 0], pose[i, 1], pose[i, 2]
-        cur_r, spd_r, ang_r, meas_r = wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3]
-        int_r, der_r, last_r = wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6]
-        cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
-        int_l, der_l, last_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6]
-        for k in range(k0, k1):
-            t = k * dt
-            tau = load_on if t >= load_start else 0.0
-            level = level_on if t >= level_start else 0.0
-            if open_loop:
-                ref = math.nan
-                volt_r = level
-                volt_l = level
-            else:
-                ref = level
-                int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref, meas_r, gains, dt)
-                last_r = meas_r
-                int_l, der_l, volt_l = pid_step_one(int_l, der_l, last_l, ref, meas_l, gains, dt)
-                last_l = meas_l
-            row = rec_index[k]
-            if row >= 0:
-                pose_rec[row, i, 0] = px
-                pose_rec[row, i, 1] = py
-                pose_rec[row, i, 2] = pth
-                wheel_rec[row, i, 0, 0] = spd_r
-                wheel_rec[row, i, 0, 1] = meas_r
-                wheel_rec[row, i, 0, 2] = ref
-                wheel_rec[row, i, 0, 3] = cur_r
-                wheel_rec[row, i, 0, 4] = volt_r
-                wheel_rec[row, i, 0, 5] = tau
-                wheel_rec[row, i, 1, 0] = spd_l
-                wheel_rec[row, i, 1, 1] = meas_l
-                wheel_rec[row, i, 1, 2] = ref
-                wheel_rec[row, i, 1, 3] = cur_l
-                wheel_rec[row, i, 1, 4] = volt_l
-                wheel_rec[row, i, 1, 5] = tau
-            if k == n_steps:
-                continue
-            cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau, coef)
-            cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau, coef)
-            ang_r, count_r, meas_r = encoder_step_one(
-                ang_r, dphi_r, history[i, 0, 1], per_rad, per_count
-            )
-            ang_l, count_l, meas_l = encoder_step_one(
-                ang_l, dphi_l, history[i, 1, 1], per_rad, per_count
-            )
-            for h in range(window):
-                history[i, 0, h] = history[i, 0, h + 1]
-                history[i, 1, h] = history[i, 1, h + 1]
-            history[i, 0, window] = count_r
-            history[i, 1, window] = count_l
-            px, py, pth = diff_drive_step_one(
-                px, py, pth, dphi_r * scale_r, dphi_l * scale_l, radius, axle
-            )
-        pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
-        wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
-        wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6] = int_r, der_r, last_r
-        wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
-        wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6] = int_l, der_l, last_l
+    for i in range(pose.shape[0]):  # robots are independent
+        _motor_team_robot(
+            i,
+            k0,
+            k1,
+            n_steps,
+            dt,
+            command,
+            pose,
+            wheel,
+            history,
+            motor,
+            pid,
+            geom,
+            encoder,
+            rec_index,
+            pose_rec,
+            wheel_rec,
+        )
 
 
-motor_team_chunk = numba.njit(cache=True)(_motor_team_chunk_py)
-motor_team_chunk_parallel = numba.njit(cache=True, parallel=True)(_motor_team_chunk_py)
+@numba.njit(cache=True, parallel=True)
+def motor_team_chunk_parallel(
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    command: FloatArray,
+    pose: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    encoder: FloatArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    wheel_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`motor_team_chunk` with the robots spread over every core (the same result
+    bit for bit)."""
+    for i in numba.prange(pose.shape[0]):  # robots are independent
+        _motor_team_robot(
+            i,
+            k0,
+            k1,
+            n_steps,
+            dt,
+            command,
+            pose,
+            wheel,
+            history,
+            motor,
+            pid,
+            geom,
+            encoder,
+            rec_index,
+            pose_rec,
+            wheel_rec,
+        )
 
 
 def run_motor_team(

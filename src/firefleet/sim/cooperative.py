@@ -53,7 +53,8 @@ PARALLEL_MIN_ROBOTS = 64
 the result is the same bit for bit); smaller ones on one, where threads cost more than
 they bring."""
 _CHUNKS = 100
-"""The kernel runs in this many pieces, so a progress bar can move."""
+"""With a progress callback the kernel runs in this many pieces, so a progress bar can
+move; without one, in one piece."""
 
 
 def simulate_path_following(
@@ -126,13 +127,16 @@ def simulate_path_following(
     n_rec = rec_steps.size
     pose_rec = np.empty((n_rec, n, 3))
     odom_rec = np.empty((n_rec, n, 3))
-    wheel_rec = np.empty((n_rec, n, 2, 6))  # speed, measured, ref, current, voltage, load
-    ctl_rec = np.empty((n_rec, n, len(CONTROL_SERIES)))
+    # in Fortran order each recorded series is one contiguous block, returned without a
+    # copy: speed, measured, ref, current, voltage, load
+    wheel_rec = np.empty((n_rec, n, 2, 6), order="F")
+    ctl_rec = np.empty((n_rec, n, len(CONTROL_SERIES)), order="F")
     desired_rec = np.empty((n_rec, n, 2))
     rec_index = np.full(n_steps + 1, -1, dtype=np.int64)
     rec_index[rec_steps] = np.arange(n_rec)
 
-    bounds = np.unique(np.linspace(0, n_steps + 1, _CHUNKS + 1).astype(np.int64))
+    chunks = _CHUNKS if callable(progress) else 1
+    bounds = np.unique(np.linspace(0, n_steps + 1, chunks + 1).astype(np.int64))
     for k0, k1 in itertools.pairwise(bounds):
         kernel = path_following_chunk_parallel if n >= PARALLEL_MIN_ROBOTS else path_following_chunk
         kernel(
@@ -169,16 +173,16 @@ def simulate_path_following(
         scenario=scenario,
         t=np.asarray(rec_steps * dt, dtype=np.float64),
         pose=pose_rec,
-        wheel_speed_rad_s=wheel_rec[..., 0].copy(),
-        wheel_speed_measured_rad_s=wheel_rec[..., 1].copy(),
-        wheel_speed_ref_rad_s=wheel_rec[..., 2].copy(),
-        current_a=wheel_rec[..., 3].copy(),
-        voltage_v=wheel_rec[..., 4].copy(),
-        load_torque_n_m=wheel_rec[..., 5].copy(),
+        wheel_speed_rad_s=wheel_rec[..., 0],
+        wheel_speed_measured_rad_s=wheel_rec[..., 1],
+        wheel_speed_ref_rad_s=wheel_rec[..., 2],
+        current_a=wheel_rec[..., 3],
+        voltage_v=wheel_rec[..., 4],
+        load_torque_n_m=wheel_rec[..., 5],
         extra={
             "odometry_pose": odom_rec,
             "desired_xy_m": desired_rec,
-            **{name: ctl_rec[:, :, i].copy() for i, name in enumerate(CONTROL_SERIES)},
+            **{name: ctl_rec[..., i] for i, name in enumerate(CONTROL_SERIES)},
         },
     )
 

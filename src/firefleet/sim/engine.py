@@ -95,7 +95,9 @@ def simulate(
     if backend not in ("auto", "array"):
         raise InputError(f"backend must be 'auto' or 'array', got {backend!r}")
     n_steps = scenario.n_steps
-    rec_steps = np.unique(np.r_[np.arange(0, n_steps + 1, record_every), n_steps])
+    rec_steps = np.arange(0, n_steps + 1, record_every)
+    if rec_steps[-1] != n_steps:  # the last step is always recorded
+        rec_steps = np.r_[rec_steps, n_steps]
     cmd = scenario.command
     if isinstance(cmd, VoltageStep | WheelSpeedStep):
         return _simulate_motors(scenario, rec_steps, progress, backend)
