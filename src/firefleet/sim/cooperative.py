@@ -29,7 +29,11 @@ from firefleet.control.path_following import PathFollowingController
 from firefleet.models.motor import discretise_motor
 from firefleet.planning.trajectory import Trajectory
 from firefleet.scenarios.schema import PathFollowing, Scenario
-from firefleet.sim._kernels import path_following_chunk, path_following_chunk_parallel
+from firefleet.sim._kernels import (
+    PARALLEL_MIN_ROBOTS,
+    path_following_chunk,
+    path_following_chunk_parallel,
+)
 from firefleet.sim.result import SimResult
 
 __all__ = ["CONTROL_SERIES", "simulate_path_following"]
@@ -48,10 +52,6 @@ CONTROL_SERIES = (
 )
 """Controller quantities recorded each sample, (T, N) each, in this order."""
 
-PARALLEL_MIN_ROBOTS = 64
-"""Teams at least this large run their robots on every core (they are independent, so
-the result is the same bit for bit); smaller ones on one, where threads cost more than
-they bring."""
 _CHUNKS = 100
 """With a progress callback the kernel runs in this many pieces, so a progress bar can
 move; without one, in one piece."""
