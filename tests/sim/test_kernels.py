@@ -235,3 +235,15 @@ def test_parallel_motor_kernel_equals_serial() -> None:
         )
         np.testing.assert_array_equal(alone["pose"][:, 0], together.pose[:, i])
         np.testing.assert_array_equal(alone["voltage"][:, 0], together.voltage_v[:, i])
+
+
+def test_path_following_in_pieces_equals_one_piece() -> None:
+    # with a progress callback the run goes in 100 pieces on one core, without one in one
+    # piece on every core: the state carried between pieces makes them the same run
+    scn = load_scenario("coop-different-paths")
+    calls: list[int] = []
+    pieces = simulate(scn, progress=lambda done, total: calls.append(done)).arrays()
+    whole = simulate(scn).arrays()
+    assert len(calls) >= 50
+    for key, arr in whole.items():
+        np.testing.assert_array_equal(pieces[key], arr, err_msg=key)

@@ -46,6 +46,7 @@ from firefleet.sim.drive import DriveStack
 __all__ = [
     "MOTOR_RECORD",
     "PARALLEL_MIN_ROBOTS",
+    "PARALLEL_MIN_ROBOTS_ONE_PIECE",
     "motor_team_chunk",
     "motor_team_chunk_parallel",
     "path_following_chunk",
@@ -56,11 +57,16 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-PARALLEL_MIN_ROBOTS = 2
+PARALLEL_MIN_ROBOTS = 64
 """Teams at least this large run their robots on every core (they are independent, so
-the result is the same bit for bit). A run in one piece starts the threads once (some
-10 us): three robots on two cores already run their 80 s path following about 1.4 times
-faster in wall time than on one."""
+the result is the same bit for bit); smaller ones on one, where starting the threads for
+each piece of a run costs more than they bring (on a busy machine a sleeping thread can
+take milliseconds to wake)."""
+
+PARALLEL_MIN_ROBOTS_ONE_PIECE = 2
+"""The same for a path-following run in one piece (no progress callback): the threads
+start once for the whole run, some 10 us against the 3 ms a robot takes for 80 s. Three
+robots on two cores: about 1.4 times faster in wall time than on one."""
 
 
 @numba.njit(cache=True)

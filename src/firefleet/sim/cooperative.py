@@ -31,6 +31,7 @@ from firefleet.planning.trajectory import Trajectory
 from firefleet.scenarios.schema import PathFollowing, Scenario
 from firefleet.sim._kernels import (
     PARALLEL_MIN_ROBOTS,
+    PARALLEL_MIN_ROBOTS_ONE_PIECE,
     path_following_chunk,
     path_following_chunk_parallel,
 )
@@ -138,7 +139,8 @@ def simulate_path_following(
     chunks = _CHUNKS if callable(progress) else 1
     bounds = np.unique(np.linspace(0, n_steps + 1, chunks + 1).astype(np.int64))
     for k0, k1 in itertools.pairwise(bounds):
-        kernel = path_following_chunk_parallel if n >= PARALLEL_MIN_ROBOTS else path_following_chunk
+        parallel = n >= (PARALLEL_MIN_ROBOTS_ONE_PIECE if chunks == 1 else PARALLEL_MIN_ROBOTS)
+        kernel = path_following_chunk_parallel if parallel else path_following_chunk
         kernel(
             int(k0),
             int(k1),
