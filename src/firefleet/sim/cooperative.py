@@ -97,19 +97,8 @@ def simulate_path_following(
     cpr = enc.counts_per_rev
     phase = rng.uniform(0.0, 2.0 * math.pi / cpr if cpr else 0.0, size=(n, 2))
     disc = discretise_motor(scenario.motor, dt)
-    motor = np.r_[disc.ad.ravel(), disc.bd.ravel(), disc.c_ad, disc.c_bd]
-    g = scenario.speed_pid
-    pid = np.array(
-        [
-            g.kp,
-            g.ki,
-            g.kd,
-            g.derivative_filter_s,
-            g.setpoint_weight,
-            g.tracking_time_s,
-            g.output_limit,
-        ]
-    )
+    motor = np.array(disc.coefficients)
+    pid = np.array(scenario.speed_pid.gains)
     geom = np.array([scenario.robot.wheel_radius_m, scenario.robot.axle_length_m])
     load = np.array([scenario.load.torque_n_m, scenario.load.start_s])
 
