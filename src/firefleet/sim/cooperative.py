@@ -19,6 +19,7 @@ the common release schedule, so a team run equals its robots run one by one.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -58,6 +59,13 @@ _CHUNKS = 100
 move; without one, in one piece."""
 
 
+@functools.cache
+def _builtin_controller() -> PathFollowingController:
+    """The shipped controller, read once: its ``.fis`` files are part of the package, and
+    reading them took 0.7 ms of a 3-robot run's 11 ms."""
+    return PathFollowingController.builtin()
+
+
 def simulate_path_following(
     scenario: Scenario,
     rec_steps: NDArray[np.int64],
@@ -86,7 +94,12 @@ def simulate_path_following(
     """
     cmd = scenario.command
     assert isinstance(cmd, PathFollowing)
-    ctl = controller if controller is not None else PathFollowingController.from_command(cmd)
+    if controller is not None:
+        ctl = controller
+    elif not cmd.controller_fis and not cmd.lambda_fis:
+        ctl = _builtin_controller()
+    else:
+        ctl = PathFollowingController.from_command(cmd)
     traj = Trajectory.from_paths(cmd.paths, pieces=cmd.pieces, duration_s=cmd.trajectory_s)
     spacing = np.array([p.length_m / cmd.pieces for p in cmd.paths])
     rng = np.random.default_rng(scenario.seed)
