@@ -238,8 +238,8 @@ def test_parallel_motor_kernel_equals_serial() -> None:
 
 
 def test_path_following_in_pieces_equals_one_piece() -> None:
-    # with a progress callback the run goes in 100 pieces on one core, without one in one
-    # piece on every core: the state carried between pieces makes them the same run
+    # with a progress callback the run goes in 100 pieces, without one in one piece: the
+    # state carried from piece to piece makes them the same run
     scn = load_scenario("coop-different-paths")
     calls: list[int] = []
     pieces = simulate(scn, progress=lambda done, total: calls.append(done)).arrays()

@@ -63,10 +63,14 @@ the result is the same bit for bit); smaller ones on one, where starting the thr
 each piece of a run costs more than they bring (on a busy machine a sleeping thread can
 take milliseconds to wake)."""
 
-PARALLEL_MIN_ROBOTS_ONE_PIECE = 2
-"""The same for a path-following run in one piece (no progress callback): the threads
-start once for the whole run, some 10 us against the 3 ms a robot takes for 80 s. Three
-robots on two cores: about 1.4 times faster in wall time than on one."""
+PARALLEL_MIN_ROBOTS_ONE_PIECE = 64
+"""The same for a path-following run in one piece (no progress callback), where the
+threads start once for the whole run. 2 would run coop-different-paths (3 robots, 80 s)
+1.15 to 1.4 times faster in wall time on two cores, but then every small team starts
+numba's GNU OpenMP threads, and a process that has started them and then forks (a
+``multiprocessing`` pool with the default "fork" start) ends its children when they run
+a parallel kernel ("fork() called from a process already using GNU OpenMP"). Kept at the
+team size where the threads were already in use before."""
 
 
 @numba.njit(cache=True)
