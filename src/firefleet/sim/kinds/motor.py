@@ -9,19 +9,25 @@ encoders' measured speeds into voltages. Both run on the world loop
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import TypeVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from firefleet.errors import InputError
 from firefleet.scenarios.schema import Scenario, VoltageStep, WheelSpeedStep
-from firefleet.sim.loop import DecideInputs, Decider, WheelCommand
+from firefleet.sim._kernels import run_motor_team
+from firefleet.sim.drive import discretise_drive
+from firefleet.sim.loop import DecideInputs, Decider, ProgressCallback, WheelCommand
 from firefleet.sim.metrics import _crossing, recovery_time, step_response_info
 from firefleet.sim.registry import Metrics, TaskKind
 from firefleet.sim.result import SimResult
 
 __all__ = ["KINDS", "StepParams", "voltage_step_metrics", "wheel_speed_step_metrics"]
+
+FloatArray = NDArray[np.float64]
 
 _C = TypeVar("_C", VoltageStep, WheelSpeedStep)
 
@@ -164,6 +170,46 @@ def _speed_figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
     return wheel_speed_step_figures(result, metrics)
 
 
+def _motor_fused(
+    scenario: Scenario,
+    phase: FloatArray,
+    rec_steps: NDArray[np.int64],
+    progress: ProgressCallback | None,
+    *,
+    open_loop: bool,
+) -> SimResult:
+    """The default stages' motor run, compiled (:func:`firefleet.sim._kernels.run_motor_team`):
+    the same wheel stack as the staged loop, bit for bit (tests/sim/test_loop.py)."""
+    _, step = _voltage_init(scenario) if open_loop else _speed_init(scenario)
+    stack = discretise_drive(
+        scenario.robot, scenario.motor, scenario.speed_pid, scenario.encoder, scenario.dt_s
+    )
+    out = run_motor_team(
+        stack,
+        scenario.initial_poses,
+        phase,
+        open_loop=open_loop,
+        level=step.value,
+        level_start_s=step.start_s,
+        load_torque_n_m=scenario.load.torque_n_m,
+        load_start_s=scenario.load.start_s,
+        n_steps=scenario.n_steps,
+        rec_steps=rec_steps,
+        progress=progress,
+    )
+    return SimResult(
+        scenario=scenario,
+        t=np.asarray(rec_steps * scenario.dt_s, dtype=np.float64),
+        pose=out["pose"],
+        wheel_speed_rad_s=out["speed"],
+        wheel_speed_measured_rad_s=out["measured"],
+        wheel_speed_ref_rad_s=out["ref"],
+        current_a=out["current"],
+        voltage_v=out["voltage"],
+        load_torque_n_m=out["load"],
+    )
+
+
 KINDS = (
     TaskKind(
         name="voltage-step",
@@ -176,6 +222,7 @@ KINDS = (
         metrics=voltage_step_metrics,
         figures=_voltage_figures,
         decider=Decider(init=_voltage_init, decide=voltage_decide),
+        fused=functools.partial(_motor_fused, open_loop=True),
     ),
     TaskKind(
         name="wheel-speed-step",
@@ -191,6 +238,7 @@ KINDS = (
         metrics=wheel_speed_step_metrics,
         figures=_speed_figures,
         decider=Decider(init=_speed_init, decide=speed_decide),
+        fused=functools.partial(_motor_fused, open_loop=False),
     ),
 )
 """The two motor kinds."""

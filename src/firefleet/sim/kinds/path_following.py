@@ -12,13 +12,14 @@ For each robot of the team (Figure 10), on the world loop (:mod:`firefleet.sim.l
     drive            PID -> DC motors (exact ZOH, load torque) -> true pose (exact arc)
                      -> encoders
 
-The default stages run as one compiled chunk (:mod:`._path_following_kernel`), called
+The default stages run as one compiled chunk (:mod:`firefleet.sim._kernels`), called
 from :func:`_kernel_chunk` only. Robots interact only through the common release
 schedule, so a team run equals its robots run one by one.
 """
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -37,7 +38,12 @@ from firefleet.models.kinematics import RobotGeometry, body_to_wheels
 from firefleet.models.motor import discretise_motor
 from firefleet.planning.trajectory import Trajectory
 from firefleet.scenarios.schema import PathFollowing, Scenario
-from firefleet.sim.kinds._path_following_kernel import run_chunk, run_chunk_parallel
+from firefleet.sim._kernels import (
+    PARALLEL_MIN_ROBOTS,
+    PARALLEL_MIN_ROBOTS_ONE_PIECE,
+    path_following_chunk,
+    path_following_chunk_parallel,
+)
 from firefleet.sim.loop import DecideInputs, Decider, ProgressCallback, WheelCommand, chunk_bounds
 from firefleet.sim.registry import Metrics, TaskKind
 from firefleet.sim.result import SimResult
@@ -67,11 +73,6 @@ CONTROL_SERIES = (
 SERIES = ("odometry_pose", "desired_xy_m", *CONTROL_SERIES)
 """What a run records in ``extra``: the odometry (T, N, 3), the desired points (T, N, 2)
 and the controller series."""
-
-PARALLEL_MIN_ROBOTS = 64
-"""Teams at least this large run their robots on every core (they are independent, so
-the result is the same bit for bit); smaller ones on one, where threads cost more than
-they bring."""
 
 
 def _command(scenario: Scenario) -> PathFollowing:
@@ -182,29 +183,25 @@ class _Buffers:
     desired_rec: FloatArray
 
 
+@functools.cache
+def _builtin_controller() -> PathFollowingController:
+    """The shipped controller, read once: its ``.fis`` files are part of the package, and
+    reading them took 0.7 ms of a 3-robot run's 11 ms."""
+    return PathFollowingController.builtin()
+
+
 def _start(scenario: Scenario, phase: FloatArray, rec_steps: NDArray[np.int64]) -> _Buffers:
     cmd = _command(scenario)
-    ctl = PathFollowingController.from_command(cmd)
+    builtin = not cmd.controller_fis and not cmd.lambda_fis
+    ctl = _builtin_controller() if builtin else PathFollowingController.from_command(cmd)
     traj = _trajectory(cmd)
     assert traj.spacing_m is not None  # from_paths sets it
     dt = scenario.dt_s
     n = scenario.n_robots
     enc = scenario.encoder
     cpr = enc.counts_per_rev
-    disc = discretise_motor(scenario.motor, dt)
-    motor = np.r_[disc.ad.ravel(), disc.bd.ravel(), disc.c_ad, disc.c_bd]
-    g = scenario.speed_pid
-    pid = np.array(
-        [
-            g.kp,
-            g.ki,
-            g.kd,
-            g.derivative_filter_s,
-            g.setpoint_weight,
-            g.tracking_time_s,
-            g.output_limit,
-        ]
-    )
+    motor = np.array(discretise_motor(scenario.motor, dt).coefficients)
+    pid = np.array(scenario.speed_pid.gains)
     geom = np.array([scenario.robot.wheel_radius_m, scenario.robot.axle_length_m])
     load = np.array([scenario.load.torque_n_m, scenario.load.start_s])
     # state: true pose, odometry pose, per wheel: current, speed, angle, measured speed,
@@ -223,8 +220,10 @@ def _start(scenario: Scenario, phase: FloatArray, rec_steps: NDArray[np.int64]) 
     rec_index[rec_steps] = np.arange(n_rec)
     pose_rec = np.empty((n_rec, n, 3))
     odom_rec = np.empty((n_rec, n, 3))
-    wheel_rec = np.empty((n_rec, n, 2, 6))  # speed, measured, ref, current, voltage, load
-    ctl_rec = np.empty((n_rec, n, len(CONTROL_SERIES)))
+    # speed, measured, ref, current, voltage, load; Fortran order, so that each quantity
+    # is one contiguous block the result takes without a copy
+    wheel_rec = np.empty((n_rec, n, 2, 6), order="F")
+    ctl_rec = np.empty((n_rec, n, len(CONTROL_SERIES)), order="F")
     desired_rec = np.empty((n_rec, n, 2))
     args = (
         scenario.n_steps,
@@ -254,10 +253,14 @@ def _start(scenario: Scenario, phase: FloatArray, rec_steps: NDArray[np.int64]) 
     return _Buffers(scenario, rec_steps, args, pose_rec, odom_rec, wheel_rec, ctl_rec, desired_rec)
 
 
-def _kernel_chunk(buffers: _Buffers, k0: int, k1: int) -> None:
-    """Ticks ``k0 .. k1 - 1`` of the compiled loop: the one call of the kernel."""
+def _kernel_chunk(buffers: _Buffers, k0: int, k1: int, *, one_piece: bool = False) -> None:
+    """Ticks ``k0 .. k1 - 1`` of the compiled loop: the one call of the kernel.
+
+    Robots run on every core from ``PARALLEL_MIN_ROBOTS`` robots (one whole run from
+    ``PARALLEL_MIN_ROBOTS_ONE_PIECE``); the result is the same bit for bit."""
     n = buffers.scenario.n_robots
-    kernel = run_chunk_parallel if n >= PARALLEL_MIN_ROBOTS else run_chunk
+    parallel = n >= (PARALLEL_MIN_ROBOTS_ONE_PIECE if one_piece else PARALLEL_MIN_ROBOTS)
+    kernel = path_following_chunk_parallel if parallel else path_following_chunk
     kernel(k0, k1, *buffers.args)
 
 
@@ -267,9 +270,13 @@ def _fused_run(
     rec_steps: NDArray[np.int64],
     progress: ProgressCallback | None,
 ) -> SimResult:
-    """The default stages' run, compiled: the kernel in chunks of ticks."""
+    """The default stages' run, compiled: the kernel in chunks of ticks when a progress
+    bar is to move, else in one piece."""
     buffers = _start(scenario, phase, rec_steps)
     n_steps = scenario.n_steps
+    if progress is None:
+        _kernel_chunk(buffers, 0, n_steps + 1, one_piece=True)
+        return _finish(buffers)
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         _kernel_chunk(buffers, int(k0), int(k1))
         if progress is not None:
@@ -283,16 +290,16 @@ def _finish(buffers: _Buffers) -> SimResult:
         scenario=buffers.scenario,
         t=np.asarray(buffers.rec_steps * buffers.scenario.dt_s, dtype=np.float64),
         pose=buffers.pose_rec,
-        wheel_speed_rad_s=wheel_rec[..., 0].copy(),
-        wheel_speed_measured_rad_s=wheel_rec[..., 1].copy(),
-        wheel_speed_ref_rad_s=wheel_rec[..., 2].copy(),
-        current_a=wheel_rec[..., 3].copy(),
-        voltage_v=wheel_rec[..., 4].copy(),
-        load_torque_n_m=wheel_rec[..., 5].copy(),
+        wheel_speed_rad_s=wheel_rec[..., 0],
+        wheel_speed_measured_rad_s=wheel_rec[..., 1],
+        wheel_speed_ref_rad_s=wheel_rec[..., 2],
+        current_a=wheel_rec[..., 3],
+        voltage_v=wheel_rec[..., 4],
+        load_torque_n_m=wheel_rec[..., 5],
         extra={
             "odometry_pose": buffers.odom_rec,
             "desired_xy_m": buffers.desired_rec,
-            **{name: ctl_rec[:, :, i].copy() for i, name in enumerate(CONTROL_SERIES)},
+            **{name: ctl_rec[:, :, i] for i, name in enumerate(CONTROL_SERIES)},
         },
     )
 
