@@ -254,7 +254,7 @@ def _png(fig: Any) -> bytes:
     return buf.getvalue()
 
 
-def _anaglyph_png(left: NDArray[np.uint8], right: NDArray[np.uint8], title: str) -> bytes:
+def _anaglyph_png(left: NDArray[Any], right: NDArray[Any], title: str) -> bytes:
     """Red-cyan composite of a pair (the deliverable's Figure 44): red left, cyan right."""
     from matplotlib.figure import Figure
 
@@ -271,16 +271,16 @@ def _anaglyph_png(left: NDArray[np.uint8], right: NDArray[np.uint8], title: str)
 
 
 def _matches_png(
-    left: NDArray[np.uint8],
-    right: NDArray[np.uint8],
-    pts_l: FloatArray,
-    pts_r: FloatArray,
+    left: NDArray[Any],
+    right: NDArray[Any],
+    pts_l: NDArray[Any],
+    pts_r: NDArray[Any],
     title: str,
 ) -> bytes:
     """Matched interest points drawn across the pair (the deliverable's 'SURF features')."""
     from matplotlib.figure import Figure
 
-    def rgb(img: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    def rgb(img: NDArray[Any]) -> NDArray[Any]:
         return np.repeat(img[..., None], 3, axis=2) if img.ndim == 2 else img[..., ::-1]
 
     both = np.concatenate([rgb(left), rgb(right)], axis=1)
