@@ -54,13 +54,17 @@ def _motor_response(result: SimResult) -> bytes:
         _band(ax, cmd.speed_rad_s)
     else:
         assert isinstance(cmd, VoltageStep)
-        level = cmd.voltage_v * np.where(t >= cmd.start_s - 1e-9, 1.0, 0.0)
-        ax.plot(
-            t,
-            level,
-            "k--",
-            lw=1.2,
-            label=f'input {cmd.voltage_v:g} V (the deliverable\'s "reference")',
+        # The input is a voltage: it is drawn on the voltage axis below, not here. The
+        # deliverable calls it the motor's "1 rad/sec reference" (Figure 24): say so.
+        ax.text(
+            0.98,
+            0.45,
+            f'input: a {cmd.voltage_v:g} V step (bottom panel),\nthe deliverable\'s "reference"',
+            transform=ax.transAxes,
+            ha="right",
+            va="center",
+            fontsize=8,
+            color="0.3",
         )
         steady = cmd.voltage_v * scn.motor.speed_gain_rad_s_per_v
         ax.axhline(
