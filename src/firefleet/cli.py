@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -306,16 +307,23 @@ def _fis_tables(system: SugenoSystem) -> list[Table]:
 # ------------------------------------------------------------------ thermal (issue 5)
 
 
+def _check_flag(ok: bool, flag: str, value: Any, expected: str) -> None:
+    """Raise an InputError naming the flag a person typed unless ``ok``."""
+    if not ok:
+        raise InputError(f"{flag} must be {expected}, got {value}")
+
+
 def _cmd_thermal(args: argparse.Namespace, out: Console, err: Console) -> int:
     from firefleet.perception import thermal as th  # scipy.ndimage only when needed
-    from firefleet.report.thermal import detection_png
+    from firefleet.report.thermal import detection_png, figure_names
 
+    _check_flag(0.0 < args.hfov_deg < 180.0, "--hfov-deg", args.hfov_deg, "in (0, 180) degrees")
+    if args.fire_width_m is not None:
+        _check_flag(args.fire_width_m > 0.0, "--fire-width-m", args.fire_width_m, "> 0 [m]")
     calibration = th.LinearCalibration.parse(args.counts) if args.counts else None
     params = th.DetectionParams(fire_width_m=args.fire_width_m)
     paths = th.frame_paths(args.frames)
-    names = [p.name for p in paths]
-    if len(set(names)) != len(names):
-        raise InputError("two frames share a file name; their outputs would collide")
+    pictures = figure_names(paths)
     dest = Path(args.out)
     documents: list[dict[str, Any]] = []
     with staged_dir(dest) as stage, _progress_bar(err, "thermal frames") as progress:
@@ -323,9 +331,9 @@ def _cmd_thermal(args: argparse.Namespace, out: Console, err: Console) -> int:
             frame = th.read_frame(path, calibration=calibration)
             camera = th.CameraModel.for_frame(frame.shape, hfov_deg=args.hfov_deg)
             result = th.detect(frame, camera=camera, params=params)
-            documents.append(th.detections_document(path.name, result))
+            documents.append({**th.detections_document(path.name, result), "figure": pictures[i]})
             png = detection_png(result.filtered_c, result, title=path.name)
-            (stage / f"{path.stem}.png").write_bytes(png)
+            (stage / pictures[i]).write_bytes(png)
             progress(i + 1, len(paths))
         (stage / "detections.json").write_text(json_text(documents), encoding="utf-8")
     table = Table(title="thermal detections")
@@ -350,17 +358,24 @@ def _add_thermal_parser(sub: Any) -> None:
     thermal.add_argument(
         "frames", nargs="+", metavar="FRAME", help=".npy (C) or image; or a folder"
     )
-    thermal.add_argument("--out", metavar="DIR", default="runs/thermal", help="output folder")
+    thermal.add_argument(
+        "--out", metavar="DIR", default="runs/thermal", help="output folder (default runs/thermal)"
+    )
     thermal.add_argument(
         "--counts",
         metavar="CAL",
         help="frames hold counts: 'tlinear' (0.01 K), 'tlinear10' (0.1 K) or 'GAIN,OFFSET' (C)",
     )
     thermal.add_argument(
-        "--hfov-deg", type=float, default=51.0, help="horizontal field of view (Lepton: 51)"
+        "--hfov-deg",
+        type=float,
+        default=51.0,
+        help="horizontal field of view [deg] (default 51, the Lepton's)",
     )
     thermal.add_argument(
-        "--fire-width-m", type=float, help="size prior of a fire [m]: gives fires a range"
+        "--fire-width-m",
+        type=float,
+        help="size prior of a fire [m]: gives fires a range (default: none)",
     )
 
 
@@ -484,6 +499,7 @@ def _figure_number(label: str) -> tuple[int, str]:
 
 def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
     from firefleet.perception import stereo
+    from firefleet.report.stereo import run_files
 
     if args.calib is None and not (args.uncalibrated or args.rectified):
         raise InputError("stereo: give --calib FILE, --uncalibrated or --rectified")
@@ -491,8 +507,27 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
         raise InputError("stereo: --rectified and --uncalibrated exclude each other")
     if (args.focal_px is None) != (args.baseline_m is None):
         raise InputError("stereo: --focal-px and --baseline-m go together")
+    for flag, value in (("--focal-px", args.focal_px), ("--baseline-m", args.baseline_m)):
+        if value is not None:
+            _check_flag(math.isfinite(value) and value > 0.0, flag, value, "a number > 0")
+    _check_flag(math.isfinite(args.doffs_px), "--doffs-px", args.doffs_px, "a finite number")
+    _check_flag(
+        math.isfinite(args.min_depth_m) and args.min_depth_m > 0.0,
+        "--min-depth-m",
+        args.min_depth_m,
+        "a number > 0 [m]",
+    )
+    _check_flag(args.sectors >= 1, "--sectors", args.sectors, ">= 1")
     calib = stereo.load_calibration(args.calib) if args.calib else None
     left, right = stereo.read_image(args.left), stereo.read_image(args.right)
+    if args.num_disparities is not None:
+        width = left.shape[1]
+        _check_flag(
+            0 < args.num_disparities < width and args.num_disparities % 16 == 0,
+            "--num-disparities",
+            args.num_disparities,
+            f"a positive multiple of 16 below the image width {width} px",
+        )
     mode = "rectified" if args.rectified else "uncalibrated" if args.uncalibrated else "calibrated"
     run = stereo.process_pair(
         left,
@@ -504,42 +539,72 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
         doffs_px=args.doffs_px,
         min_disparity=args.min_disparity,
         num_disparities=args.num_disparities,
+        min_depth_m=args.min_depth_m,
         n_sectors=args.sectors,
     )
     summary = {"left": str(args.left), "right": str(args.right), **run.summary}
     dest = Path(args.out)
+    files = run_files(run)
     with staged_dir(dest) as stage:
-        names = stereo.write_run(run, stage)
+        for name, content in files.items():
+            (stage / name).write_bytes(content)
         (stage / "summary.json").write_text(json_text(summary), encoding="utf-8")
+    names = list(files)
     table = Table(title=f"stereo ({mode})")
     table.add_column("quantity")
     table.add_column("value", justify="right")
     for key, value in summary.items():
-        if isinstance(value, float):
+        if isinstance(value, bool):
+            table.add_row(key, "[red]YES" if value else "no")
+        elif isinstance(value, float):
             table.add_row(key, f"{value:.6g}")
         elif isinstance(value, int):
             table.add_row(key, str(value))
     out.print(table)
+    if summary.get("search_saturated"):
+        err.print(
+            f"warning: {summary['saturated_pct']:.1f} % of the pixels matched at the end of "
+            f"the disparity search ({summary['num_disparities']} px): something is nearer "
+            "than it measures; nearest_obstacle_m is not reported"
+            + (
+                f" (nearer than {summary['obstacle_nearer_than_m']:.3g} m)"
+                if summary.get("obstacle_nearer_than_m") is not None
+                else ""
+            )
+            + "; widen --num-disparities or leave it out",
+            markup=False,
+            highlight=False,
+        )
     out.print(f"wrote {dest}/: {', '.join([*names, 'summary.json'])}", markup=False)
     return EXIT_OK
 
 
 def _cmd_capture(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from firefleet.perception.capture import stereo_capture
+    from firefleet.perception import capture
 
+    _check_flag(args.frames >= 1, "--frames", args.frames, ">= 1")
+    _check_flag(args.offset >= 0, "--offset", args.offset, ">= 0")
+    _check_flag(args.every >= 1, "--every", args.every, ">= 1")
+    for flag, size in (("--width", args.width), ("--height", args.height)):
+        if size is not None:
+            _check_flag(size > 0, flag, size, "> 0 [px]")
     dest = Path(args.out)
+    rows: list[dict[str, Any]] = []
     with staged_dir(dest) as stage, _progress_bar(err, "capture") as progress:
-        rows = stereo_capture(
+        for frame in capture.stereo_capture(
             args.left,
             args.right,
-            stage,
             n_frames=args.frames,
             offset_frames=args.offset,
             every=args.every,
             width=args.width,
             height=args.height,
-            progress=progress,
-        )
+        ):
+            for name, content in capture.pair_files(frame).items():
+                (stage / name).write_bytes(content)
+            rows.append(capture.timestamp_row(frame))
+            progress(len(rows), args.frames)
+        (stage / "timestamps.csv").write_text(capture.timestamps_csv(rows), encoding="utf-8")
     skew = max(abs(r["skew_s"]) for r in rows)
     out.print(
         f"wrote {len(rows)} pair(s) and timestamps.csv to {dest}/ (max skew {skew * 1e3:.1f} ms)",
@@ -567,20 +632,49 @@ def _add_stereo_parsers(sub: Any) -> None:
     )
     st.add_argument("--focal-px", type=float, help="rectified focal length [px] (with --rectified)")
     st.add_argument("--baseline-m", type=float, help="baseline [m] (with --rectified)")
-    st.add_argument("--doffs-px", type=float, default=0.0, help="cx_right - cx_left [px]")
-    st.add_argument("--min-disparity", type=int, default=0, metavar="PX")
-    st.add_argument("--num-disparities", type=int, default=64, metavar="N", help="multiple of 16")
-    st.add_argument("--sectors", type=int, default=32, metavar="K", help="range-scan sectors")
-    st.add_argument("--out", metavar="DIR", default="stereo-out", help="output folder")
+    st.add_argument(
+        "--doffs-px", type=float, default=0.0, help="cx_right - cx_left [px] (default 0)"
+    )
+    st.add_argument(
+        "--min-disparity",
+        type=int,
+        default=0,
+        metavar="PX",
+        help="start of the disparity search [px] (default 0)",
+    )
+    st.add_argument(
+        "--num-disparities",
+        type=int,
+        metavar="N",
+        help="disparities to search, a multiple of 16 (default: found coarse to fine, "
+        "down to --min-depth-m)",
+    )
+    st.add_argument(
+        "--min-depth-m",
+        type=float,
+        default=0.3,
+        metavar="M",
+        help="nearest depth the default search range measures [m] (default 0.3)",
+    )
+    st.add_argument(
+        "--sectors", type=int, default=32, metavar="K", help="range-scan sectors (default 32)"
+    )
+    st.add_argument(
+        "--out", metavar="DIR", default="stereo-out", help="output folder (default stereo-out)"
+    )
     cap = sub.add_parser("capture", help="frame-synchronised pairs from two cameras or videos")
     cap.add_argument("left", metavar="LEFT", help="/dev/videoN, a camera index, or a video file")
     cap.add_argument("right", metavar="RIGHT", help="/dev/videoN, a camera index, or a video file")
     cap.add_argument("--out", metavar="DIR", required=True, help="output folder")
-    cap.add_argument("--frames", type=int, default=1, metavar="N", help="pairs to save")
-    cap.add_argument("--offset", type=int, default=0, metavar="K", help="skip K right frames")
-    cap.add_argument("--every", type=int, default=1, metavar="K", help="keep every K-th pair")
-    cap.add_argument("--width", type=int, help="camera width [px]")
-    cap.add_argument("--height", type=int, help="camera height [px]")
+    cap.add_argument("--frames", type=int, default=1, metavar="N", help="pairs to save (default 1)")
+    cap.add_argument(
+        "--offset", type=int, default=0, metavar="K", help="skip K right frames (default 0)"
+    )
+    cap.add_argument(
+        "--every", type=int, default=1, metavar="K", help="keep every K-th pair (default 1)"
+    )
+    cap.add_argument("--width", type=int, help="camera width [px] (default: the camera's)")
+    cap.add_argument("--height", type=int, help="camera height [px] (default: the camera's)")
 
 
 # ------------------------------------------------------------------------------

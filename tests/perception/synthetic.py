@@ -135,3 +135,29 @@ def stereo_chessboards(
         trans_r = rig.rotation @ trans + rig.translation_m
         rights.append(render(tex, rig.k_right, rig.dist_right, rot_r, trans_r, grid_r))
     return rig, lefts, rights
+
+
+def board_facing(
+    distance_m: float, *, baseline_m: float = 0.1
+) -> tuple[Rig, NDArray[np.uint8], NDArray[np.uint8]]:
+    """A chessboard facing the left camera of :func:`make_rig` at ``distance_m``.
+
+    The rig is :func:`make_rig`'s (same intrinsics, distortion and toe-in) with its
+    baseline scaled to ``baseline_m``. The board plane is ``Z = distance_m`` in the left
+    camera's frame, centred on the optical axis: every point of it is at least
+    ``distance_m`` from the camera centre, and its centre exactly that far.
+    """
+    base = make_rig()
+    t = base.translation_m * (baseline_m / float(np.linalg.norm(base.translation_m)))
+    rig = Rig(base.k_left, base.dist_left, base.k_right, base.dist_right, base.rotation, t)
+    width = (PATTERN[0] - 1) * SQUARE_M
+    height = (PATTERN[1] - 1) * SQUARE_M
+    rot = np.eye(3)
+    trans = np.array([-width / 2, -height / 2, distance_m])
+    tex = board_texture()
+    left = render(tex, rig.k_left, rig.dist_left, rot, trans, ideal_grid(rig.k_left, rig.dist_left))
+    rot_r = rig.rotation @ rot
+    trans_r = rig.rotation @ trans + rig.translation_m
+    grid_r = ideal_grid(rig.k_right, rig.dist_right)
+    right = render(tex, rig.k_right, rig.dist_right, rot_r, trans_r, grid_r)
+    return rig, left, right

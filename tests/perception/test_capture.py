@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -11,7 +12,13 @@ import pytest
 
 from firefleet.cli import main
 from firefleet.errors import InputError
-from firefleet.perception.capture import open_source, stereo_capture
+from firefleet.perception.capture import (
+    open_source,
+    pair_files,
+    stereo_capture,
+    timestamp_row,
+    timestamps_csv,
+)
 
 FPS = 10.0
 
@@ -32,11 +39,23 @@ def level(path: Path) -> float:
     return float(img.mean())
 
 
+def capture_into(left: str, right: str, folder: Path, **kwargs: int) -> list[dict[str, Any]]:
+    """Capture with the library and save the pairs as the ``capture`` command does."""
+    folder.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for frame in stereo_capture(left, right, **kwargs):
+        for name, content in pair_files(frame).items():
+            (folder / name).write_bytes(content)
+        rows.append(timestamp_row(frame))
+    (folder / "timestamps.csv").write_text(timestamps_csv(rows), encoding="utf-8")
+    return rows
+
+
 def test_one_file_opened_twice_with_an_offset(tmp_path: Path) -> None:
     video = tmp_path / "cam.avi"
     write_video(video, 20)
     out = tmp_path / "pairs"
-    rows = stereo_capture(str(video), str(video), out, n_frames=5, offset_frames=3)
+    rows = capture_into(str(video), str(video), out, n_frames=5, offset_frames=3)
     assert [r["index"] for r in rows] == [0, 1, 2, 3, 4]
     for k, row in enumerate(rows):
         # Frame k on the left, frame k + 3 on the right (JPEG keeps flat levels to +-2).
@@ -55,9 +74,7 @@ def test_two_files_every_second_pair_stops_at_the_shorter(tmp_path: Path) -> Non
     write_video(tmp_path / "l.avi", 9)
     write_video(tmp_path / "r.avi", 6, base=5)
     out = tmp_path / "pairs"
-    rows = stereo_capture(
-        str(tmp_path / "l.avi"), str(tmp_path / "r.avi"), out, n_frames=10, every=2
-    )
+    rows = capture_into(str(tmp_path / "l.avi"), str(tmp_path / "r.avi"), out, n_frames=10, every=2)
     # Frames 0, 2, 4 of both (the right file ends after frame 5).
     assert len(rows) == 3
     for k, row in zip((0, 2, 4), rows, strict=True):
@@ -74,7 +91,7 @@ def test_sources_that_cannot_be_opened_are_named(tmp_path: Path) -> None:
     junk = tmp_path / "junk.avi"
     junk.write_bytes(b"not a video at all")
     with pytest.raises(InputError, match=r"junk\.avi"):
-        stereo_capture(str(junk), str(junk), tmp_path / "o", n_frames=1)
+        list(stereo_capture(str(junk), str(junk), n_frames=1))
 
 
 def test_capture_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -103,3 +120,43 @@ def test_capture_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
     ]
     assert not bad.exists()
     assert not list(tmp_path.glob(".bad.staging-*"))
+
+
+def test_opencv_log_lines_do_not_reach_the_terminal(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # OpenCV writes "[ WARN:0@...]" lines to file descriptor 2 when a camera or a video
+    # cannot be opened; capfd sees them (capsys would not).
+    junk = tmp_path / "junk.avi"
+    junk.write_bytes(b"not a video at all")
+    for source in ("/dev/video63", str(junk)):
+        assert main(["capture", source, source, "--out", str(tmp_path / "o")]) == 2
+        err = capfd.readouterr().err.strip().splitlines()
+        assert len(err) == 1, err
+        assert err[0].startswith("firefleet: error: ")
+        assert "WARN" not in err[0]
+    # The library leaves OpenCV's log level as it found it.
+    before = cv2.utils.logging.getLogLevel()
+    with pytest.raises(InputError):
+        open_source("/dev/video63")
+    assert cv2.utils.logging.getLogLevel() == before
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (["--frames", "0"], "--frames must be >= 1, got 0"),
+        (["--offset", "-1"], "--offset must be >= 0, got -1"),
+        (["--every", "0"], "--every must be >= 1, got 0"),
+        (["--width", "0"], "--width must be > 0 [px], got 0"),
+    ],
+)
+def test_capture_errors_name_the_flag(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], flags: list[str], named: str
+) -> None:
+    video = tmp_path / "cam.avi"
+    write_video(video, 4)
+    out = tmp_path / "o"
+    assert main(["capture", str(video), str(video), *flags, "--out", str(out)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"firefleet: error: {named}"]
+    assert not out.exists()

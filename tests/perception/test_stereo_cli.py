@@ -76,7 +76,7 @@ def test_stereo_rectified_pair_writes_consistent_outputs(
 def test_stereo_calibrated_pair(tmp_path: Path) -> None:
     _, lefts, rights = stereo_chessboards(10)
     calib = st.calibrate_stereo(lefts, rights, pattern_size=PATTERN, square_size_m=SQUARE_M)
-    st.save_calibration(calib, tmp_path / "rig.yaml")
+    (tmp_path / "rig.yaml").write_text(st.calibration_yaml(calib), encoding="utf-8")
     cv2.imwrite(str(tmp_path / "l.png"), lefts[0])
     cv2.imwrite(str(tmp_path / "r.png"), rights[0])
     out = tmp_path / "o"
@@ -126,7 +126,7 @@ def test_stereo_bad_input_exits_2_and_writes_nothing(
     # A calibration made for 640 x 480 images, used on 240 x 160 ones.
     _, lefts, rights = stereo_chessboards(4)
     calib = st.calibrate_stereo(lefts, rights, pattern_size=PATTERN, square_size_m=SQUARE_M)
-    st.save_calibration(calib, tmp_path / "rig.yaml")
+    (tmp_path / "rig.yaml").write_text(st.calibration_yaml(calib), encoding="utf-8")
     args = ["stereo", str(pair[0]), str(pair[1]), "--calib", str(tmp_path / "rig.yaml")]
     assert main([*args, "--out", str(out)]) == 2
     assert "calibration is for 640 x 480 px images, these are 240 x 160" in _one_error_line(capsys)
@@ -139,3 +139,40 @@ def test_stereo_bad_input_exits_2_and_writes_nothing(
     assert "none.png: no such image file" in _one_error_line(capsys)
     assert not out.exists()
     assert not list(tmp_path.glob(".o.staging-*"))
+
+
+def test_corrupt_png_gives_our_message_not_opencvs(
+    pair: tuple[Path, Path], tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    # A PNG signature followed by garbage: OpenCV's decoder logs "[ WARN:0@...]" and
+    # "[ERROR:0@...]" lines to file descriptor 2 unless silenced.
+    broken = tmp_path / "broken.png"
+    broken.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\x00" * 40)
+    out = tmp_path / "o"
+    assert main(["stereo", str(broken), str(pair[1]), "--rectified", "--out", str(out)]) == 2
+    err = capfd.readouterr().err.strip().splitlines()
+    assert err == [f"firefleet: error: {broken}: not a readable image (empty or corrupt)"]
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (["--num-disparities", "40"], "--num-disparities must be a positive multiple of 16"),
+        (["--num-disparities", "256"], "below the image width 240 px, got 256"),
+        (["--min-depth-m", "0"], "--min-depth-m must be a number > 0 [m], got 0.0"),
+        (["--focal-px", "-5", "--baseline-m", "0.1"], "--focal-px must be a number > 0"),
+        (["--sectors", "0"], "--sectors must be >= 1, got 0"),
+    ],
+)
+def test_stereo_errors_name_the_flag(
+    pair: tuple[Path, Path],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    flags: list[str],
+    named: str,
+) -> None:
+    out = tmp_path / "o"
+    args = ["stereo", str(pair[0]), str(pair[1]), "--rectified", *flags, "--out", str(out)]
+    assert main(args) == 2
+    assert named in _one_error_line(capsys)
+    assert not out.exists()

@@ -98,3 +98,61 @@ def test_bad_input_exits_2_one_line_nothing_written(
     assert "Traceback" not in err
     assert not out.exists()  # the good frame's outputs were staged, then dropped
     assert not list(tmp_path.glob(".out.staging-*"))
+
+
+def test_same_stem_frames_get_distinct_pictures(tmp_path: Path) -> None:
+    # x.npy (temperatures) and x.png (counts) in one call: two pictures, not one
+    # overwritten by the other.
+    hot = np.full((60, 80), 20.0)
+    hot[20:24, 30:33] = 250.0
+    np.save(tmp_path / "x.npy", hot)
+    cv2.imwrite(str(tmp_path / "x.png"), np.full((60, 80), 29315, dtype=np.uint16))  # 20 C
+    out = tmp_path / "o"
+    args = ["thermal", str(tmp_path / "x.npy"), str(tmp_path / "x.png"), "--counts", "tlinear"]
+    assert main([*args, "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["detections.json", "x_npy.png", "x_png.png"]
+    doc = json.loads((out / "detections.json").read_text())
+    assert [(d["frame"], d["figure"], d["fire_alarm"]) for d in doc] == [
+        ("x.npy", "x_npy.png", True),
+        ("x.png", "x_png.png", False),
+    ]
+    assert (out / "x_npy.png").read_bytes() != (out / "x_png.png").read_bytes()
+
+
+def test_same_file_name_in_two_folders_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for folder in ("a", "b"):
+        (tmp_path / folder).mkdir()
+        np.save(tmp_path / folder / "x.npy", np.full((60, 80), 20.0))
+    out = tmp_path / "o"
+    args = ["thermal", str(tmp_path / "a" / "x.npy"), str(tmp_path / "b" / "x.npy")]
+    assert main([*args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "share the file name x.npy" in err[0]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (["--hfov-deg", "0"], "--hfov-deg must be in (0, 180) degrees, got 0.0"),
+        (["--hfov-deg", "200"], "--hfov-deg must be in (0, 180) degrees, got 200.0"),
+        (["--hfov-deg", "nan"], "--hfov-deg must be in (0, 180) degrees, got nan"),
+        (["--fire-width-m", "-1"], "--fire-width-m must be > 0 [m], got -1.0"),
+        (["--counts", "0,-273.15"], "--counts GAIN,OFFSET needs a finite GAIN > 0"),
+        (["--counts", "0.01,nan"], "--counts GAIN,OFFSET needs a finite GAIN > 0"),
+    ],
+)
+def test_errors_name_the_flag_typed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], flags: list[str], named: str
+) -> None:
+    np.save(tmp_path / "f.npy", np.full((60, 80), 20.0))
+    assert main(["thermal", str(tmp_path / "f.npy"), *flags, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith(f"firefleet: error: {named}")
+    assert "camera." not in err[0]
+    assert "calibration." not in err[0]
+    assert "hfov_rad" not in err[0]

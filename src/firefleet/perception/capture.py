@@ -20,7 +20,7 @@ import io
 import logging
 import re
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,8 +31,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from firefleet.errors import InputError
+from firefleet.perception._opencv import quiet_opencv
 
-__all__ = ["StereoFrame", "open_source", "read_pairs", "save_pairs", "stereo_capture"]
+__all__ = [
+    "TIMESTAMP_COLUMNS",
+    "StereoFrame",
+    "open_source",
+    "pair_files",
+    "read_pairs",
+    "stereo_capture",
+    "timestamp_row",
+    "timestamps_csv",
+]
 
 log = logging.getLogger(__name__)
 
@@ -91,7 +101,8 @@ def open_source(
     """
     m = _DEVICE.match(spec)
     if m is not None:
-        cap = cv2.VideoCapture(int(m.group(1)))
+        with quiet_opencv():
+            cap = cv2.VideoCapture(int(m.group(1)))
         if not cap.isOpened():
             raise InputError(f"camera {spec}: cannot be opened (no such device, or busy)")
         if width is not None:
@@ -102,7 +113,8 @@ def open_source(
     path = Path(spec)
     if not path.is_file():
         raise InputError(f"video {spec}: no such file")
-    cap = cv2.VideoCapture(str(path))
+    with quiet_opencv():
+        cap = cv2.VideoCapture(str(path))
     if not cap.isOpened():
         raise InputError(f"video {spec}: cannot be opened (not a video OpenCV can decode)")
     return cap
@@ -148,22 +160,26 @@ def read_pairs(
             f"{offset_frames}, {every}"
         )
     for _ in range(offset_frames):
-        if not right.grab():
+        with quiet_opencv():
+            grabbed = right.grab()
+        if not grabbed:
             return
     k = 0
     produced = 0
     while produced < n_frames:
-        ok_l = left.grab()
-        t_l = _frame_time_s(left, devices[0])
-        ok_r = right.grab()
-        t_r = _frame_time_s(right, devices[1])
+        with quiet_opencv():
+            ok_l = left.grab()
+            t_l = _frame_time_s(left, devices[0])
+            ok_r = right.grab()
+            t_r = _frame_time_s(right, devices[1])
         if not (ok_l and ok_r):
             return
         k += 1
         if (k - 1) % every:
             continue
-        got_l, img_l = left.retrieve()
-        got_r, img_r = right.retrieve()
+        with quiet_opencv():
+            got_l, img_l = left.retrieve()
+            got_r, img_r = right.retrieve()
         if not (got_l and got_r) or img_l is None or img_r is None:
             raise InputError(f"pair {produced}: a frame could not be decoded")
         if img_l.shape != img_r.shape:
@@ -175,41 +191,6 @@ def read_pairs(
         produced += 1
 
 
-def save_pairs(frames: Iterator[StereoFrame], folder: Path) -> list[dict[str, Any]]:
-    """Write ``left_NNNNNN.png``, ``right_NNNNNN.png`` and ``timestamps.csv`` into ``folder``.
-
-    ``timestamps.csv`` has the columns ``index, left, right, t_left_s, t_right_s,
-    skew_s``. Returns the same rows.
-    """
-    folder.mkdir(parents=True, exist_ok=True)
-    rows: list[dict[str, Any]] = []
-    for f in frames:
-        names = (f"left_{f.index:06d}.png", f"right_{f.index:06d}.png")
-        for name, img in zip(names, (f.left, f.right), strict=True):
-            ok, buf = cv2.imencode(".png", img)
-            if not ok:
-                raise InputError(f"{name}: could not be encoded as PNG")
-            (folder / name).write_bytes(buf.tobytes())
-        rows.append(
-            {
-                "index": f.index,
-                "left": names[0],
-                "right": names[1],
-                "t_left_s": f.t_left_s,
-                "t_right_s": f.t_right_s,
-                "skew_s": f.skew_s,
-            }
-        )
-    text = io.StringIO()
-    writer = csv.DictWriter(
-        text, fieldnames=["index", "left", "right", "t_left_s", "t_right_s", "skew_s"]
-    )
-    writer.writeheader()
-    writer.writerows(rows)
-    (folder / "timestamps.csv").write_text(text.getvalue(), encoding="utf-8")
-    return rows
-
-
 @contextmanager
 def _opened(spec: str, **kwargs: Any) -> Iterator[cv2.VideoCapture]:
     cap = open_source(spec, **kwargs)
@@ -219,27 +200,65 @@ def _opened(spec: str, **kwargs: Any) -> Iterator[cv2.VideoCapture]:
         cap.release()
 
 
+TIMESTAMP_COLUMNS = ("index", "left", "right", "t_left_s", "t_right_s", "skew_s")
+"""Columns of ``timestamps.csv`` (:func:`timestamps_csv`)."""
+
+
+def pair_files(frame: StereoFrame) -> dict[str, bytes]:
+    """The pair as PNG files, ``left_NNNNNN.png`` and ``right_NNNNNN.png``, name to bytes.
+
+    Raises
+    ------
+    InputError
+        If a frame cannot be encoded.
+    """
+    files: dict[str, bytes] = {}
+    for side, img in (("left", frame.left), ("right", frame.right)):
+        name = f"{side}_{frame.index:06d}.png"
+        ok, buf = cv2.imencode(".png", img)
+        if not ok:
+            raise InputError(f"{name}: could not be encoded as PNG")
+        files[name] = bytes(buf.tobytes())
+    return files
+
+
+def timestamp_row(frame: StereoFrame) -> dict[str, Any]:
+    """The ``timestamps.csv`` row of a pair: file names, timestamps and skew [s]."""
+    return {
+        "index": frame.index,
+        "left": f"left_{frame.index:06d}.png",
+        "right": f"right_{frame.index:06d}.png",
+        "t_left_s": frame.t_left_s,
+        "t_right_s": frame.t_right_s,
+        "skew_s": frame.skew_s,
+    }
+
+
+def timestamps_csv(rows: list[dict[str, Any]]) -> str:
+    """``timestamps.csv`` text of :func:`timestamp_row` rows (columns
+    :data:`TIMESTAMP_COLUMNS`)."""
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=list(TIMESTAMP_COLUMNS), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return text.getvalue()
+
+
 def stereo_capture(
     left: str,
     right: str,
-    folder: Path,
     *,
     n_frames: int,
     offset_frames: int = 0,
     every: int = 1,
     width: int | None = None,
     height: int | None = None,
-    progress: Callable[[int, int], None] | None = None,
-) -> list[dict[str, Any]]:
-    """Capture ``n_frames`` synchronised pairs from two sources into ``folder``.
+) -> Iterator[StereoFrame]:
+    """Capture up to ``n_frames`` synchronised pairs from two sources, one at a time.
 
-    See :func:`open_source`, :func:`read_pairs` and :func:`save_pairs`. ``progress`` is
-    called with ``(done, total)`` after each pair.
-
-    Returns
-    -------
-    list of dict
-        The rows of ``timestamps.csv``.
+    Opens both sources (:func:`open_source`), yields :func:`read_pairs`' pairs, and
+    releases the sources when the iteration ends. The caller keeps or saves each pair
+    (:func:`pair_files`, :func:`timestamp_row`); the library writes no file.
 
     Raises
     ------
@@ -247,27 +266,22 @@ def stereo_capture(
         If a source cannot be opened (named), or yields no frame at all.
     """
     devices = (_is_device(left), _is_device(right))
+    produced = 0
     with (
         _opened(left, width=width, height=height) as cap_l,
         _opened(right, width=width, height=height) as cap_r,
     ):
-
-        def counted() -> Iterator[StereoFrame]:
-            for f in read_pairs(
-                cap_l,
-                cap_r,
-                n_frames=n_frames,
-                offset_frames=offset_frames,
-                every=every,
-                devices=devices,
-            ):
-                yield f
-                if progress is not None:
-                    progress(f.index + 1, n_frames)
-
-        rows = save_pairs(counted(), folder)
-    if not rows:
+        for f in read_pairs(
+            cap_l,
+            cap_r,
+            n_frames=n_frames,
+            offset_frames=offset_frames,
+            every=every,
+            devices=devices,
+        ):
+            produced += 1
+            yield f
+    if produced == 0:
         raise InputError(f"no frame pair could be read from {left} and {right}")
-    if len(rows) < n_frames:
-        log.warning("a source ended after %d of %d pairs", len(rows), n_frames)
-    return rows
+    if produced < n_frames:
+        log.warning("a source ended after %d of %d pairs", produced, n_frames)

@@ -1,4 +1,6 @@
-"""Stereo figures: a colour-mapped disparity image and a rectified pair with epipolar rows.
+"""Stereo outputs: a colour-mapped disparity image, a rectified pair with epipolar rows,
+and every file of a ``firefleet stereo`` run as bytes (:func:`run_files`; the CLI writes
+them).
 
 matplotlib is imported inside the functions (only when a figure is made), with the Agg
 backend.
@@ -9,12 +11,52 @@ from __future__ import annotations
 import io
 import math
 
+import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError
+from firefleet.outputs import json_text
+from firefleet.perception.stereo import StereoRun, ply_bytes
 
-__all__ = ["disparity_png", "rectified_pair_png"]
+__all__ = ["disparity_png", "rectified_pair_png", "run_files"]
+
+
+def _npy_bytes(array: NDArray[np.float32]) -> bytes:
+    buf = io.BytesIO()
+    np.save(buf, np.asarray(array, dtype=np.float32), allow_pickle=False)
+    return buf.getvalue()
+
+
+def _png_bytes(image: NDArray[np.uint8], name: str) -> bytes:
+    ok, buf = cv2.imencode(".png", image)
+    if not ok:
+        raise InputError(f"{name}: could not be encoded as PNG")
+    return bytes(buf.tobytes())
+
+
+def run_files(run: StereoRun) -> dict[str, bytes]:
+    """The files of a :class:`~firefleet.perception.stereo.StereoRun`, name to content.
+
+    ``rectified_left.png``, ``rectified_right.png``, ``disparity.npy`` (float32 [px],
+    NaN where none), ``confidence.npy``, ``disparity.png``, ``rectified_pair.png`` (the
+    pair side by side with rows drawn, to check the rectification by eye); with metric
+    geometry also ``depth.npy`` (float32 [m], NaN where none), ``cloud.ply`` and
+    ``scan.json``. ``summary.json`` is the caller's (it may add to it).
+    """
+    files = {
+        "rectified_left.png": _png_bytes(run.rect_left, "rectified_left.png"),
+        "rectified_right.png": _png_bytes(run.rect_right, "rectified_right.png"),
+        "disparity.npy": _npy_bytes(run.result.disparity),
+        "confidence.npy": _npy_bytes(run.result.confidence),
+        "disparity.png": disparity_png(run.result.disparity),
+        "rectified_pair.png": rectified_pair_png(run.rect_left, run.rect_right),
+    }
+    if run.depth_m is not None and run.scan is not None:
+        files["depth.npy"] = _npy_bytes(run.depth_m)
+        files["cloud.ply"] = ply_bytes(run.points, run.colors)
+        files["scan.json"] = json_text(run.scan.to_dict()).encode("utf-8")
+    return files
 
 
 def disparity_png(

@@ -3,13 +3,59 @@
 from __future__ import annotations
 
 import io
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet.errors import InputError
 from firefleet.perception.thermal import FrameDetections
 
-__all__ = ["detection_png"]
+__all__ = ["detection_png", "figure_names"]
+
+
+def figure_names(frames: Sequence[str | Path]) -> list[str]:
+    """The picture's file name of each frame: ``<stem>.png``, distinct for every frame.
+
+    Frames that share a stem (``x.npy`` and ``x.png``) get their type in the name
+    (``x_npy.png``, ``x_png.png``), so one picture never overwrites another.
+
+    Raises
+    ------
+    InputError
+        If two frames share a file name (``a/x.npy`` and ``b/x.npy``: their entries in
+        ``detections.json`` could not be told apart), or names still collide.
+
+    Examples
+    --------
+    >>> figure_names(["x.npy", "x.png", "y.npy"])
+    ['x_npy.png', 'x_png.png', 'y.png']
+    """
+    paths = [Path(f) for f in frames]
+    by_name: dict[str, list[Path]] = {}
+    for p in paths:
+        by_name.setdefault(p.name, []).append(p)
+    for name, same in by_name.items():
+        if len(same) > 1:
+            raise InputError(
+                f"frames {', '.join(map(str, same))} share the file name {name}: rename one "
+                "(outputs are named after the frame)"
+            )
+    stems = Counter(p.stem for p in paths)
+    names = [
+        f"{p.stem}_{p.suffix.lstrip('.').lower()}.png" if stems[p.stem] > 1 else f"{p.stem}.png"
+        for p in paths
+    ]
+    clash = [n for n, k in Counter(names).items() if k > 1]
+    if clash:
+        raise InputError(
+            f"frames would write the same picture {clash[0]}: rename one of "
+            + ", ".join(str(p) for p, n in zip(paths, names, strict=True) if n == clash[0])
+        )
+    return names
+
 
 _COLOURS = {"fire": "#ff2a2a", "person": "#2aff6a", "warm": "#35c8ff"}
 
