@@ -13,11 +13,11 @@ import datetime as dt
 import html
 import math
 import re
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["SECTIONS", "ReportEntry", "format_value", "render_index", "section_of"]
+__all__ = ["SECTIONS", "ReportEntry", "ReportRun", "format_value", "render_index", "section_of"]
 
 
 @dataclass(frozen=True)
@@ -51,6 +51,36 @@ class ReportEntry:
     document: dict[str, Any]
     command: str = ""
     links: tuple[str, ...] = ("metrics.json", "result.npz")
+
+
+@dataclass(frozen=True)
+class ReportRun:
+    """One entry of the report that is not a scenario run.
+
+    Attributes
+    ----------
+    name : str
+        Folder name and anchor.
+    title, reproduces, deliverable_says : str
+        As a scenario's.
+    command : str
+        The command line that reproduces the numbers outside the report.
+    files : mapping of str to bytes
+        Figures (PNG) and data by file name, for the caller to write into ``name/``.
+    figures : tuple of str
+        The files that are figures, in the order the report shows them.
+    document : dict
+        ``{"scenario": name, "claims": [...], **metrics}``, written as ``metrics.json``.
+    """
+
+    name: str
+    title: str
+    reproduces: str
+    deliverable_says: str
+    command: str
+    files: Mapping[str, bytes]
+    figures: tuple[str, ...]
+    document: dict[str, Any] = field(default_factory=dict)
 
 
 SECTIONS: tuple[tuple[str, str, tuple[int, int]], ...] = (

@@ -26,22 +26,17 @@ from __future__ import annotations
 import io
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from firefleet.errors import InputError
+from firefleet.report.html import ReportRun
 from firefleet.scenarios.schema import Claim
 from firefleet.sim.metrics import metrics_document
 
-__all__ = [
-    "KNOWN_FRAMES",
-    "ReportRun",
-    "stereo_runs",
-    "thermal_run",
-]
+__all__ = ["KNOWN_FRAMES", "stereo_runs", "thermal_run"]
 
 FloatArray = NDArray[np.float64]
 
@@ -53,36 +48,6 @@ KNOWN_FRAMES = {
 
 _T420_OBJECT_RC = (128.0, 172.0)
 """Where the T420 frame's warm object is [px] (row, column)."""
-
-
-@dataclass(frozen=True)
-class ReportRun:
-    """One entry of the report that is not a scenario run.
-
-    Attributes
-    ----------
-    name : str
-        Folder name and anchor.
-    title, reproduces, deliverable_says : str
-        As a scenario's.
-    command : str
-        The command line that reproduces the numbers outside the report.
-    files : mapping of str to bytes
-        Figures (PNG) and data by file name, for the caller to write into ``name/``.
-    figures : tuple of str
-        The files that are figures, in the order the report shows them.
-    document : dict
-        ``{"scenario": name, "claims": [...], **metrics}``, as ``metrics.json``.
-    """
-
-    name: str
-    title: str
-    reproduces: str
-    deliverable_says: str
-    command: str
-    files: Mapping[str, bytes]
-    figures: tuple[str, ...]
-    document: dict[str, Any] = field(default_factory=dict)
 
 
 def _claim(metric: str, op: str, value: float, source: str, rel_tol: float = 0.0) -> Claim:

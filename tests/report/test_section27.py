@@ -62,3 +62,20 @@ def test_stereo_runs_against_the_motorcycle_ground_truth() -> None:
     assert un["matches"] > 100
     assert all(c["passed"] for c in doc["claims"] + un["claims"])
     assert not math.isnan(un["scene_in_frame_pct"])
+
+
+def test_slam_runs_on_the_loop_and_the_victoria_park_subset() -> None:
+    pytest.importorskip("gtsam")
+    from firefleet.report.slam import slam_report_runs
+
+    log = Path(__file__).resolve().parents[1] / "data" / "victoria_park_first1500.txt"
+    loop, park = slam_report_runs(log, seed=1)
+    assert all(c["passed"] for c in loop.document["claims"])
+    assert loop.document["duplicate_landmarks"] == 0
+    # Victoria Park's first 929 poses: the default run is within 2.5 m of GTSAM's optimum
+    # (as tests/estimation's default-options test measures: 0.6-0.9 m), and far better
+    # than dead reckoning.
+    doc = park.document
+    assert doc["ate_vs_gtsam_m"] <= 2.5
+    assert doc["ate_vs_gtsam_m"] < 0.5 * doc["odometry_ate_vs_gtsam_m"]
+    assert park.files["slam.png"].startswith(b"\x89PNG")
