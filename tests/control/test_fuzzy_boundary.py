@@ -1,5 +1,5 @@
 """control.fuzzy is a library: it imports neither the report nor the command line, writes
-no file, and keeps each module small (issue 12, points 4 and the ~600-line rule)."""
+no file, and keeps each module under about 600 lines (a library, not a command line)."""
 
 from __future__ import annotations
 
