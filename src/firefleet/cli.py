@@ -39,7 +39,7 @@ from rich.table import Table
 
 import firefleet
 from firefleet.errors import InputError
-from firefleet.outputs import json_text, staged_dir
+from firefleet.outputs import json_text, staged_dir, write_text_atomic
 from firefleet.scenarios.registry import builtin_names, load_scenario
 from firefleet.scenarios.schema import Scenario, read_scenario_file
 from firefleet.sim.engine import ProgressCallback, simulate
@@ -238,6 +238,21 @@ def _fis_fixed(pairs: Sequence[str]) -> dict[str, float]:
     return fixed
 
 
+def _read_csv_text(path: str) -> str:
+    """The text of ``--eval`` (a BOM from a spreadsheet dropped); InputError otherwise."""
+    src = Path(path)
+    try:
+        return src.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise InputError(f"--eval {src}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"--eval {src}: is a folder, not a CSV file") from None
+    except UnicodeDecodeError:
+        raise InputError(f"--eval {src}: not UTF-8 text (a CSV file is expected)") from None
+    except OSError as exc:
+        raise InputError(f"--eval {src}: cannot read: {exc.strerror}") from None
+
+
 def _cmd_fis(args: argparse.Namespace, out: Console, err: Console) -> int:
     from firefleet.control import fuzzy  # scipy.special only when needed
 
@@ -248,7 +263,12 @@ def _cmd_fis(args: argparse.Namespace, out: Console, err: Console) -> int:
             raise InputError("--eval IN.csv needs --out OUT.csv")
         if fixed:
             raise InputError("--fix applies to the plots, not to --eval")
-        rows = fuzzy.evaluate_csv_file(system, args.eval, args.out)
+        dest_csv = Path(args.out)
+        if dest_csv.is_dir():
+            raise InputError(f"--out {dest_csv}: is a folder; --eval writes one CSV file there")
+        table = fuzzy.evaluate_csv(system, _read_csv_text(args.eval), origin=args.eval)
+        write_text_atomic(dest_csv, table)
+        rows = table.count("\n") - 1
         out.print(f"wrote {args.out} ({rows} rows)", markup=False, highlight=False)
         return EXIT_OK
     from firefleet.report.fuzzy import figures
