@@ -1,0 +1,65 @@
+"""The ``firefleet`` command line (the contract of DESIGN.md): parser and entry point.
+
+::
+
+    firefleet list
+    firefleet run SCENARIO [--out DIR] [--seed N] [--no-plots]
+    firefleet validate FILE...
+    firefleet reproduce [--out DIR]
+    firefleet stereo LEFT RIGHT [--calib FILE | --uncalibrated | --rectified] [--out DIR]
+    firefleet capture LEFT RIGHT --out DIR [--frames N] [--offset K] [--every K]
+    firefleet fis FILE [--out DIR] [--fix NAME=VALUE ...]
+    firefleet fis FILE --eval IN.csv --out OUT.csv
+    firefleet thermal FRAME... [--out DIR] [--counts CAL] [--hfov-deg DEG] [--fire-width-m W]
+    firefleet slam LOG [--particles P] [--seed N] [--out DIR] [--version {1,2}]
+                   [--association {known,unknown}] [--odometry-noise-scale S]
+                   [--heading-drift-sigma RAD_PER_M] [--turn-scale-sigma S] [--no-plots]
+
+Bad input (an unknown scenario, a malformed file, a bad value) is one line per problem
+on stderr and exit status 2, with nothing written. A run whose claims do not all hold
+exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+
+from rich.console import Console
+
+import firefleet
+from firefleet.cli import _fis, _run, _slam, _stereo, _thermal
+from firefleet.cli._console import EXIT_BAD_INPUT
+from firefleet.errors import InputError
+
+__all__ = ["main"]
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="firefleet",
+        description="Teams of intelligent mobile robots for firefighting: simulate, "
+        "check, and reproduce the deliverable's experiments.",
+    )
+    parser.add_argument("--version", action="version", version=f"firefleet {firefleet.__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for group in (_run, _stereo, _fis, _thermal, _slam):  # the order of the help
+        group.add_parsers(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``firefleet`` command; returns the exit status."""
+    args = _parser().parse_args(argv)
+    out = Console(soft_wrap=True)
+    err = Console(stderr=True, soft_wrap=True)
+    try:
+        status: int = args.handler(args, out, err)
+    except InputError as exc:
+        for line in str(exc).splitlines():
+            err.print(f"firefleet: error: {line}", markup=False, highlight=False)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        err.print("firefleet: interrupted; nothing written")
+        return 130
+    return status
