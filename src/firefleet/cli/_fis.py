@@ -12,7 +12,7 @@ from rich.table import Table
 
 from firefleet.cli._console import EXIT_OK, progress_bar
 from firefleet.errors import InputError
-from firefleet.outputs import staged_dir
+from firefleet.outputs import run_record, staged_dir
 
 if TYPE_CHECKING:
     from firefleet.control.fuzzy import (
@@ -79,7 +79,7 @@ def _cmd_fis(args: argparse.Namespace, out: Console, err: Console) -> int:
         pngs = figures(system, fixed=fixed)
         progress(1, 1)
     dest = Path(args.out) if args.out else Path("runs") / Path(args.file).stem
-    with staged_dir(dest) as stage:
+    with staged_dir(dest, record=run_record(args.command_line, seed=None)) as stage:
         for name, data in pngs.items():
             (stage / name).write_bytes(data)
     for shown in _fis_tables(system):

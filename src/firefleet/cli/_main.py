@@ -23,13 +23,14 @@ exits 1.
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Sequence
 
 from rich.console import Console
 
 import firefleet
 from firefleet.cli import _fis, _run, _slam, _stereo, _thermal
-from firefleet.cli._console import EXIT_BAD_INPUT
+from firefleet.cli._console import EXIT_BAD_INPUT, EXIT_OK
 from firefleet.errors import InputError
 
 __all__ = ["main"]
@@ -45,12 +46,39 @@ def _parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in (_run, _stereo, _fis, _thermal, _slam):  # the order of the help
         group.add_parsers(sub)
+    for command in sub.choices.values():
+        _say_defaults(command)
     return parser
+
+
+def _say_defaults(parser: argparse.ArgumentParser) -> None:
+    """Make every option's help say its default (or that it is required)."""
+    for action in parser._actions:  # argparse has no public list of a parser's options
+        if not action.option_strings or isinstance(action, argparse._HelpAction):
+            continue
+        text = action.help or ""
+        if "default" in text or "required" in text:
+            continue
+        if action.required:
+            said = "required"
+        elif isinstance(action, argparse._StoreTrueAction):
+            said = "default: off"
+        elif action.default is None or action.default == []:
+            said = "default: none"
+        else:
+            said = f"default {action.default}"
+        action.help = f"{text} ({said})" if text else said
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``firefleet`` command; returns the exit status."""
-    args = _parser().parse_args(argv)
+    typed = list(sys.argv[1:] if argv is None else argv)
+    parser = _parser()
+    if not typed:  # bare ``firefleet``: the help, not an error
+        parser.print_help()
+        return EXIT_OK
+    args = parser.parse_args(typed)
+    args.command_line = ["firefleet", *typed]
     out = Console(soft_wrap=True)
     err = Console(stderr=True, soft_wrap=True)
     try:

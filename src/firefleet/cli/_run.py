@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +22,7 @@ from firefleet.cli._console import (
     progress_bar,
 )
 from firefleet.errors import InputError
-from firefleet.outputs import json_text, staged_dir
+from firefleet.outputs import json_text, run_record, staged_dir
 from firefleet.scenarios.registry import builtin_names, load_scenario
 from firefleet.scenarios.schema import Scenario, read_scenario_file
 from firefleet.sim.engine import simulate
@@ -36,27 +37,47 @@ def add_parsers(sub: Any) -> None:
     run = sub.add_parser("run", help="run a scenario and write its metrics, arrays and plots")
     run.add_argument("scenario", metavar="SCENARIO", help="built-in name or a YAML path")
     run.add_argument("--out", metavar="DIR", help="output folder (default: runs/SCENARIO)")
-    run.add_argument("--seed", type=int, metavar="N", help="override the scenario's seed")
-    run.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    run.add_argument(
+        "--seed", type=int, metavar="N", help="random seed (default: the scenario's own)"
+    )
+    run.add_argument(
+        "--no-plots", action="store_true", help="skip the PNG figures (default: draw them)"
+    )
     run.set_defaults(handler=cmd_run)
     validate = sub.add_parser("validate", help="check scenario files, naming each error")
     validate.add_argument("files", nargs="+", metavar="FILE")
     validate.set_defaults(handler=cmd_validate)
     reproduce = sub.add_parser("reproduce", help="run every experiment of the deliverable")
-    reproduce.add_argument("--out", metavar="DIR", default="firefleet-report", help="report folder")
+    reproduce.add_argument(
+        "--out",
+        metavar="DIR",
+        default="firefleet-report",
+        help="report folder (default firefleet-report)",
+    )
     reproduce.set_defaults(handler=cmd_reproduce)
 
 
 def run_into(
-    scenario: Scenario, folder: Path, *, plots: bool, err: Console
+    scenario: Scenario,
+    folder: Path,
+    *,
+    plots: bool,
+    err: Console,
+    command_line: Sequence[str],
 ) -> tuple[dict[str, Any], tuple[str, ...]]:
-    """Run a scenario and write its outputs into ``folder``; returns (metrics doc, figures)."""
+    """Run a scenario and write its outputs into ``folder``; returns (metrics doc, figures).
+
+    ``metrics.json`` also names what made the run (``provenance``: firefleet's version,
+    the git commit, the seed and ``command_line``); the returned document does not.
+    """
     with progress_bar(err, scenario.name) as progress:
         result = simulate(scenario, progress=progress)
     metrics = compute_metrics(result)
     document = metrics_document(scenario.name, scenario.claims, metrics)
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "metrics.json").write_text(json_text(document), encoding="utf-8")
+    provenance = run_record(command_line, seed=scenario.seed)
+    written = {"scenario": document["scenario"], "provenance": provenance, **document}
+    (folder / "metrics.json").write_text(json_text(written), encoding="utf-8")
     (folder / "result.npz").write_bytes(result.to_npz_bytes())
     names: tuple[str, ...] = ()
     if plots:
@@ -76,15 +97,14 @@ def metrics_table(document: dict[str, Any]) -> Table:
 
 
 def cmd_list(args: argparse.Namespace, out: Console, err: Console) -> int:
-    """``firefleet list``."""
-    table = Table(title="built-in scenarios")
-    table.add_column("name")
-    table.add_column("reproduces")
-    table.add_column("title")
-    for name in builtin_names():
-        scn = load_scenario(name)
-        table.add_row(name, scn.reproduces or "-", scn.title)
-    out.print(table)
+    """``firefleet list``: one line per built-in scenario, cut to the console's width."""
+    scenarios = [load_scenario(name) for name in builtin_names()]
+    width = max(len(s.name) for s in scenarios)
+    for scn in scenarios:
+        line = f"{scn.name:<{width}}  {scn.reproduces or '-'}: {scn.title}"
+        if len(line) > out.width:
+            line = line[: out.width - 1] + "\N{HORIZONTAL ELLIPSIS}"
+        out.print(line, markup=False, highlight=False, soft_wrap=True)
     return EXIT_OK
 
 
@@ -96,8 +116,11 @@ def cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
             raise InputError(f"--seed must be >= 0, got {args.seed}")
         scenario = dataclasses.replace(scenario, seed=args.seed)
     dest = Path(args.out) if args.out else Path("runs") / scenario.name
-    with staged_dir(dest) as stage:
-        document, _ = run_into(scenario, stage, plots=not args.no_plots, err=err)
+    record = run_record(args.command_line, seed=scenario.seed)
+    with staged_dir(dest, record=record) as stage:
+        document, _ = run_into(
+            scenario, stage, plots=not args.no_plots, err=err, command_line=args.command_line
+        )
     out.print(metrics_table(document))
     out.print(f"wrote {dest}/")
     return EXIT_OK if all_passed(document) else EXIT_CLAIM_FAILED
@@ -130,9 +153,12 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
     scenarios.sort(key=lambda s: _figure_number(s.reproduces))
     dest = Path(args.out)
     entries: list[ReportEntry] = []
-    with staged_dir(dest) as stage:
+    record = run_record(args.command_line, seed=None)
+    with staged_dir(dest, record=record) as stage:
         for scn in scenarios:
-            document, figs = run_into(scn, stage / scn.name, plots=True, err=err)
+            document, figs = run_into(
+                scn, stage / scn.name, plots=True, err=err, command_line=args.command_line
+            )
             entries.append(
                 ReportEntry(
                     name=scn.name,
@@ -146,7 +172,8 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
             )
             mark = "[green]ok" if all_passed(document) else "[red]CLAIM FAILED"
             out.print(f"{scn.name:<24} {mark}  {escape(scn.reproduces)}")
-        index = render_index(entries, version=firefleet.__version__)
+        seeds = {s.name: s.seed for s in scenarios}
+        index = render_index(entries, version=firefleet.__version__, provenance=record, seeds=seeds)
         (stage / "index.html").write_text(index, encoding="utf-8")
     total = sum(len(e.document["claims"]) for e in entries)
     passed = sum(c["passed"] for e in entries for c in e.document["claims"])

@@ -16,7 +16,7 @@ from firefleet.cli._console import (
     progress_bar,
 )
 from firefleet.errors import InputError
-from firefleet.outputs import json_text, staged_dir
+from firefleet.outputs import json_text, run_record, staged_dir
 
 __all__ = ["add_parsers"]
 
@@ -93,10 +93,12 @@ def _cmd_slam(args: argparse.Namespace, out: Console, err: Console) -> int:
             progress=progress,
         )
     summary = slam_summary(log, result)
-    with staged_dir(dest) as stage:
+    record = run_record(args.command_line, seed=args.seed)
+    with staged_dir(dest, record=record) as stage:
         (stage / "trajectory.csv").write_text(trajectory_csv(log, result), encoding="utf-8")
         (stage / "landmarks.csv").write_text(landmarks_csv(result), encoding="utf-8")
-        (stage / "summary.json").write_text(json_text(summary), encoding="utf-8")
+        written = {**summary, "provenance": record}
+        (stage / "summary.json").write_text(json_text(written), encoding="utf-8")
         if args.log == SIM_LOOP:
             (stage / "log.txt").write_text(format_log(log), encoding="utf-8")
         if not args.no_plots:

@@ -12,7 +12,7 @@ from rich.table import Table
 
 from firefleet.cli._console import EXIT_OK, check_flag, progress_bar
 from firefleet.errors import InputError
-from firefleet.outputs import json_text, staged_dir
+from firefleet.outputs import json_text, run_record, staged_dir
 
 __all__ = ["add_parsers"]
 
@@ -131,10 +131,12 @@ def _cmd_stereo(args: argparse.Namespace, out: Console, err: Console) -> int:
     summary = {"left": str(args.left), "right": str(args.right), **run.summary}
     dest = Path(args.out)
     files = run_files(run)
-    with staged_dir(dest) as stage:
+    record = run_record(args.command_line, seed=None)
+    with staged_dir(dest, record=record) as stage:
         for name, content in files.items():
             (stage / name).write_bytes(content)
-        (stage / "summary.json").write_text(json_text(summary), encoding="utf-8")
+        written = {**summary, "provenance": record}
+        (stage / "summary.json").write_text(json_text(written), encoding="utf-8")
     names = list(files)
     table = Table(title=f"stereo ({mode})")
     table.add_column("quantity")
@@ -176,7 +178,8 @@ def _cmd_capture(args: argparse.Namespace, out: Console, err: Console) -> int:
             check_flag(size > 0, flag, size, "> 0 [px]")
     dest = Path(args.out)
     rows: list[dict[str, Any]] = []
-    with staged_dir(dest) as stage, progress_bar(err, "capture") as progress:
+    record = run_record(args.command_line, seed=None)
+    with staged_dir(dest, record=record) as stage, progress_bar(err, "capture") as progress:
         for frame in capture.stereo_capture(
             args.left,
             args.right,

@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from firefleet.cli._console import EXIT_OK, check_flag, progress_bar
-from firefleet.outputs import json_text, staged_dir
+from firefleet.outputs import json_text, run_record, staged_dir
 
 __all__ = ["add_parsers"]
 
@@ -58,7 +58,8 @@ def _cmd_thermal(args: argparse.Namespace, out: Console, err: Console) -> int:
     pictures = figure_names(paths)
     dest = Path(args.out)
     documents: list[dict[str, Any]] = []
-    with staged_dir(dest) as stage, progress_bar(err, "thermal frames") as progress:
+    record = run_record(args.command_line, seed=None)
+    with staged_dir(dest, record=record) as stage, progress_bar(err, "thermal frames") as progress:
         for i, path in enumerate(paths):
             frame = th.read_frame(path, calibration=calibration)
             camera = th.CameraModel.for_frame(frame.shape, hfov_deg=args.hfov_deg)

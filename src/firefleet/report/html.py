@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import html
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -101,8 +102,44 @@ run again with <code>firefleet run {esc(entry.name)}</code> &middot;
 </section>"""
 
 
-def render_index(entries: list[ReportEntry], *, version: str) -> str:
-    """The report's ``index.html``."""
+def _footer(
+    version: str, stamp: str, provenance: Mapping[str, Any], seeds: Mapping[str, int]
+) -> str:
+    esc = html.escape
+    parts = [f"firefleet {esc(version)}"]
+    if provenance.get("git_commit"):
+        parts.append(f"commit <code>{esc(str(provenance['git_commit']))}</code>")
+    parts.append(stamp)
+    lines = [", ".join(parts) + "."]
+    if provenance.get("command"):
+        lines.append(f"Made by <code>{esc(str(provenance['command']))}</code>.")
+    if seeds:
+        shown = ", ".join(f"{esc(name)} {seed}" for name, seed in seeds.items())
+        lines.append(f"Seeds: {shown}.")
+    return "<footer><p class=small>" + "<br>".join(lines) + "</p></footer>"
+
+
+def render_index(
+    entries: list[ReportEntry],
+    *,
+    version: str,
+    provenance: Mapping[str, Any] | None = None,
+    seeds: Mapping[str, int] | None = None,
+) -> str:
+    """The report's ``index.html``.
+
+    Parameters
+    ----------
+    entries : list of ReportEntry
+        The experiments, in the report's order.
+    version : str
+        firefleet's version, named in the footer.
+    provenance : mapping, optional
+        What made the report (``git_commit``, ``command``, as
+        :func:`firefleet.outputs.run_record` gives), named in the footer.
+    seeds : mapping of str to int, optional
+        Each experiment's random seed, by scenario name, named in the footer.
+    """
     total = sum(len(e.document.get("claims", [])) for e in entries)
     passed = sum(c["passed"] for e in entries for c in e.document.get("claims", []))
     verdict = "pass" if passed == total else "fail"
@@ -124,6 +161,6 @@ with our figure and each claim checked against our run.</p>
 <p class="{verdict}">{passed} of {total} claims passed.</p>
 <ul>{toc}</ul>
 {body}
-<p class=small>firefleet {html.escape(version)}, {stamp}.</p>
+{_footer(version, stamp, provenance or {}, seeds or {})}
 </body></html>
 """
