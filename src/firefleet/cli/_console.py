@@ -91,7 +91,7 @@ def claims_table(
     claims = list(claims)
     table = Table(title=title, title_justify="left")
     table.add_column(columns[0], no_wrap=True, overflow="fold")
-    table.add_column(columns[1], justify="right", no_wrap=True)
+    table.add_column(columns[1], justify="right", overflow="fold")
     table.add_column("claim", overflow="fold")
     table.add_column("result", no_wrap=True)
     for key, value in values:
