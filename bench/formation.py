@@ -14,13 +14,24 @@ capped at 10 N as in the built-in scenarios):
    and tracemalloc peak are measured on the same positions, and its forces compared with
    ours; ratios are ours / peer.
 
-Floors (issue 4), printed PASS/FAIL: at N = 1,000 at least 100 steps/s (regular law, the
-costlier one); at N = 5,000 under 1 GiB (tracemalloc peak of a step, and the process's
-peak RSS). ``run`` returns every number; the exit status is 0 whatever the floors say.
+4. Converging runs (issue 13): whole simulated runs (``firefleet.simulate``) of teams of
+   20, 200 and 1,000 point-mass robots with the regular law from seeded random starts
+   (the built-in ``formation-regular-20`` and ``-200``, and :func:`team_scenario` at
+   1,000: a 150 m circle, polygon side 0.94 m, attraction stiffness 18 N/m on the
+   circle), and the deliverable's law at 200 (k_r scaled with the side squared):
+   radius error, spacing error, smallest gap between bodies, whether the claims hold
+   (radius error <= 1 % of alpha, spacing error <= 2 deg, no contact), steps per second
+   of the whole run (metrics excluded) and the sub-steps the stiffness bound asked for.
+
+Floors, printed PASS/FAIL: the N = 1,000 run converges (its claims hold) at >= 500
+steps/s (issue 13); at N = 5,000 under 1 GiB (tracemalloc peak of a step, and the
+process's peak RSS; issue 4). The per-step rows (1.) time the force at random positions
+(not a run). ``run`` returns every number; the exit status is 0 whatever the floors say.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import resource
 import sys
@@ -38,8 +49,10 @@ from numpy.typing import NDArray
 from rich.console import Console
 from rich.table import Table
 
+from firefleet import compute_metrics, load_scenario, simulate
 from firefleet.control.formation import FormationParams, coulomb_repulsion, formation_force
 from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
+from firefleet.scenarios.schema import Scenario, parse_scenario
 
 FloatArray = NDArray[np.float64]
 
@@ -51,10 +64,91 @@ REPEATS = 3
 PEER_MAX_N = 5_000
 """Largest team the peer runs at (its (N, N, 2) arrays: 400 MB at 5,000)."""
 
-FLOOR_N, FLOOR_STEPS_PER_S = 1_000, 100.0
+FLOOR_N, FLOOR_STEPS_PER_S = 1_000, 500.0
 MEMORY_N, FLOOR_BYTES = 5_000, 1 << 30
 DT_S = 0.01
-PARAMS = FormationParams(alpha_m=3.0, spacing_gain=5.0, attraction_limit_n=10.0)  # as the scenarios
+PARAMS = FormationParams(alpha_m=3.0, attraction_limit_n=10.0)  # as the scenarios
+RUN_REPEATS = 2
+"""Timed runs per converging scenario (the best counts)."""
+
+
+def team_scenario(n: int, law: str = "regular", *, seed: int = 1) -> Scenario:
+    """N point-mass robots from random starts onto a circle whose polygon side is ~0.94 m.
+
+    The recipe of ``formation-regular-200``: alpha = 0.47 m / sin(pi / N) rounded up to
+    the metre; attraction gain 9 / alpha^2 (stiffness 2 a alpha^2 = 18 N/m on the
+    circle, as eq. 6 on the 3 m circle); starts in a square of half-width alpha / 2
+    (40 m from N = 1,000 on); 60 s, shape metrics over the last 5 s. The deliverable's
+    law gets ``k_r = 10 (0.94 m / 3.53 m)^2`` (3.53 m: the 5-gon's side on the 3 m
+    circle of ``formation-5``).
+    """
+    alpha = float(np.ceil(0.47 / np.sin(np.pi / n)))
+    command: dict[str, Any] = {
+        "kind": "formation",
+        "law": law,
+        "alpha_m": alpha,
+        "attraction_gain": 9.0 / alpha**2,
+        "scatter_m": max(5.0, alpha / 2.0) if n < 1_000 else 40.0,
+        "formed_by_s": 55.0,
+    }
+    claims: list[dict[str, Any]] = [
+        {"metric": "radius_error_max_m", "op": "<=", "value": 0.01 * alpha},
+        {"metric": "spacing_error_max_deg", "op": "<=", "value": 2.0},
+        {"metric": "min_clearance_m", "op": ">", "value": 0.0},
+    ]
+    if law == "deliverable":
+        # the deliverable's law: all robots on the circle, an irregular polygon, and no
+        # contact force (robots may touch on the way)
+        command["k_r"] = 10.0 * (0.94 / 3.53) ** 2
+        claims = claims[:1]
+    return parse_scenario(
+        {
+            "name": f"formation-{law}-{n}",
+            "title": f"{n} robots, {law} law",
+            "duration_s": 60.0,
+            "seed": seed,
+            "poses": [[0.0, 0.0, 0.0]] * n,
+            "command": command,
+            "claims": claims,
+        }
+    )
+
+
+def run_converging(scenario: Scenario, repeats: int = RUN_REPEATS) -> dict[str, Any]:
+    """Time whole runs of ``scenario`` (best of ``repeats``), and judge the last one.
+
+    Both the wall time and this process's CPU time are measured: the run is single
+    threaded (BLAS threads set to 1), so on an idle machine they agree, and on a shared
+    one the CPU time is the run's own cost (the wall time also counts the neighbours).
+    """
+    best = best_cpu = math.inf
+    result = None
+    for _ in range(repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        result = simulate(scenario)
+        best = min(best, time.perf_counter() - t0)
+        best_cpu = min(best_cpu, time.process_time() - c0)
+    assert result is not None
+    metrics = compute_metrics(result)
+    claims = {c.metric: c.holds(metrics[c.metric]) for c in scenario.claims}
+    cmd = scenario.command
+    return {
+        "scenario": scenario.name,
+        "n_robots": scenario.n_robots,
+        "law": getattr(cmd, "law", ""),
+        "alpha_m": getattr(cmd, "alpha_m", math.nan),
+        "radius_error_max_m": metrics["radius_error_max_m"],
+        "spacing_error_max_deg": metrics["spacing_error_max_deg"],
+        "min_clearance_m": metrics["min_clearance_m"],
+        "claims": claims,
+        "claims_hold": all(claims.values()),
+        "steps_per_s": scenario.n_steps / best,
+        "steps_per_cpu_s": scenario.n_steps / best_cpu,
+        "max_substeps": int(np.max(result.extra["substeps"])),
+        "mean_substeps": float(np.mean(result.extra["substeps"])),
+    }
+
+
 MASS = MassDamperParams()
 
 
@@ -199,23 +293,58 @@ def run(console: Console) -> dict[str, Any]:
         )
     console.print(table)
 
+    console.print("  whole runs: formation-regular-20, -200, 1,000 robots; deliverable 200")
+    runs = [
+        run_converging(load_scenario("formation-regular-20")),
+        run_converging(load_scenario("formation-regular-200")),
+        run_converging(team_scenario(FLOOR_N)),
+        run_converging(team_scenario(200, "deliverable"), repeats=1),
+    ]
+    table = Table(
+        title="whole runs from random starts (simulate; metrics not timed)",
+        caption="radius error (mm), spacing error (deg), min gap between bodies (m); steps per "
+        "wall second and per CPU second; deliverable: radius claim only (no contact force)",
+    )
+    for col in ("N", "law", "alpha", "radius", "spacing", "gap", "claims", "steps/s", "/cpu s"):
+        table.add_column(col, justify="right")
+    for r in runs:
+        failed = [k for k, ok in r["claims"].items() if not ok]
+        table.add_row(
+            f"{r['n_robots']:,}",
+            r["law"][:3],
+            f"{r['alpha_m']:g} m",
+            f"{1e3 * r['radius_error_max_m']:.2g}",
+            f"{r['spacing_error_max_deg']:.2g}",
+            f"{r['min_clearance_m']:.3f}",
+            "FAIL" if failed else "hold",
+            f"{r['steps_per_s']:,.0f}",
+            f"{r['steps_per_cpu_s']:,.0f}",
+        )
+    console.print(table)
+
+    big = runs[2]
+    rate = big["steps_per_cpu_s"]
     by_n = {r["n_robots"]: r for r in laws}
-    rate = by_n[FLOOR_N]["regular_steps_per_s"]
     traced = by_n[MEMORY_N]["step_traced_peak_bytes"]
     rss = by_n[MEMORY_N]["max_rss_after_bytes"]
     floors = {
-        "steps_per_s_at_1000": {"measured": rate, "floor": FLOOR_STEPS_PER_S},
+        "converging_steps_per_s_at_1000": {
+            "measured": rate,
+            "floor": FLOOR_STEPS_PER_S,
+            "claims_hold": big["claims_hold"],
+        },
         "traced_peak_bytes_at_5000": {"measured": traced, "ceiling": FLOOR_BYTES},
         "max_rss_bytes_after_5000": {"measured": rss, "ceiling": FLOOR_BYTES},
     }
-    table = Table(title="floors (issue 4)")
+    table = Table(title="floors (issues 4 and 13)")
     for col in ("floor", "measured", "bound", "result"):
         table.add_column(col)
     table.add_row(
-        "N = 1,000, regular law",
-        f"{rate:,.1f} steps/s",
-        f">= {FLOOR_STEPS_PER_S:g}",
-        _verdict(rate >= FLOOR_STEPS_PER_S),
+        "N = 1,000, regular law, whole run",
+        f"{rate:,.0f} steps/CPU s ({big['steps_per_s']:,.0f}/wall s), claims "
+        + ("hold" if big["claims_hold"] else "fail"),
+        f">= {FLOOR_STEPS_PER_S:g}, claims hold",
+        _verdict(rate >= FLOOR_STEPS_PER_S and big["claims_hold"]),
     )
     table.add_row(
         "N = 5,000, traced peak of a step", _mb(traced), "< 1 GiB", _verdict(traced < FLOOR_BYTES)
@@ -227,7 +356,7 @@ def run(console: Console) -> dict[str, Any]:
         _verdict(rss < FLOOR_BYTES),
     )
     console.print(table)
-    return {"laws": laws, "peer": peers, "floors": floors}
+    return {"laws": laws, "peer": peers, "runs": runs, "floors": floors}
 
 
 if __name__ == "__main__":

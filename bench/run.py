@@ -1,719 +1,109 @@
-"""Benchmark: firefleet's closed-loop wheel-motor simulation, and python-control as a peer.
+"""``make bench``: run every topic's benchmark, check the floors, compare with the baseline.
 
-``make bench`` runs this file. One run measures, prints (rich tables) and writes
-``bench/results.json`` (machine information and every number):
+Each ``bench/<topic>.py`` exposes ``run(console)``, prints its own tables and returns
+its rows, floors and details (``_harness.TopicResult``; ``_topics`` reads the topics that
+still return a dict). This driver then prints one table of floors (issue 12's five
+first, then every topic's own), writes the results file (default ``bench/results.json``)
+and prints every row against ``bench/baseline.json``, flagging a speed row more than
+10 % slower. The exit status is 0 whatever the floors say (this is a measurement), 1
+when a topic failed to run (the others still run and are written).
 
-1. Team scaling. The built-in ``motor-pid`` scenario (10 s, dt = 10 ms, 1000 steps,
-   2048-count encoder, filtered PID) for teams of N = 1, 100 and 10,000 robots (two
-   wheel motors each): steps/s, robot-steps/s and the tracemalloc peak of one run.
-2. Peer. The same 10 s single-motor loop as an interconnected *nonlinear* I/O system
-   in python-control (``nlsys`` + ``interconnect`` + ``input_output_response``):
-   Table 2 motor, PI with setpoint weight, +-12 V saturation and back-calculation
-   anti-windup (firefleet's law with kd = 0), speed step 1 rad/s at t = 0, load step
-   0.5 N m at t = 5 s, outputs evaluated on ``np.linspace(0, 10, 1001)``. The peer has no
-   derivative and no encoder quantisation, so firefleet is run on the same loop: an
-   ideal encoder (``counts_per_rev = 0``, ``window_steps = 1``) and ``kd = 0``. Both
-   wall times (best of several), their ratio, and how far the two speed traces differ,
-   with the evidence that tells where any difference comes from.
-3. Each capability's own benchmark (``bench/<topic>.py``, its ``run(console)``), in the
-   order of ``TOPICS``: their tables, floors and numbers go into the same results file.
-4. Floors, printed PASS/FAIL: the single-motor loop at least 10x faster than
-   python-control's, and at least 1,000 steps/s at N = 10,000. The exit status is 0
-   whatever the floors say: this is a measurement, not a test.
-
-Only the simulation calls are timed (``time.perf_counter``), each after one untimed
-warm-up call; building the scenario or the I/O system is not.
+    python bench/run.py [--only motor,fuzzy] [--out FILE] [--baseline FILE]
+                        [--write-baseline FILE]
 """
 
 from __future__ import annotations
 
-import dataclasses
-import datetime as dt
+import argparse
 import importlib
-import json
-import os
-import platform
-import resource
+import subprocess
 import sys
 import time
-import tracemalloc
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
-import control as ct
-import numpy as np
-import scipy
-import scipy.integrate
-from numpy.typing import NDArray
 from rich.console import Console
-from rich.table import Table
 
-import firefleet
-from firefleet import Scenario, SimResult
-from firefleet.control.pid import PidParams
-from firefleet.models.motor import MotorParams
-from firefleet.scenarios.schema import WheelSpeedStep
-from firefleet.sim.engine import SCALAR_MAX_ROBOTS
+import _harness as h
+from _topics import topic_result
+
+HERE = Path(__file__).resolve().parent
+TOPICS = ("motor", "path_following", "fuzzy", "formation", "thermal", "stereo", "slam")
+ISSUE_12: tuple[tuple[str, h.Op, float], ...] = (
+    ("motor.single.speedup_vs_python_control", ">=", 100.0),
+    ("motor.team.n10000.steps_per_s", ">=", 3_000.0),
+    ("path_following.coop_different_paths.x_real_time", ">=", 10_000.0),
+    ("path_following.robots1000.x_real_time", ">=", 50.0),
+    ("fuzzy.single.evals_per_s", ">=", 300_000.0),
+)
+"""The speed floors of issue 12: (row key, comparison, bound)."""
+
+
+def git_commit() -> str | None:
+    """The repository's short commit hash (None outside a git checkout)."""
+    cmd = ["git", "-C", str(HERE), "rev-parse", "--short", "HEAD"]
+    done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    return done.stdout.strip() or None
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the topics, print the floors and the regression check, write the results."""
+    h.single_threaded_blas()
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only", default=",".join(TOPICS), help="comma-separated topics")
+    ap.add_argument("--out", type=Path, default=HERE / "results.json")
+    ap.add_argument("--baseline", type=Path, default=HERE / "baseline.json")
+    ap.add_argument("--write-baseline", type=Path, help="also write this run's rows there")
+    args = ap.parse_args(argv)
+    topics = [t for t in args.only.split(",") if t]
+    unknown = sorted(set(topics) - set(TOPICS))
+    if unknown:
+        ap.error(f"--only: unknown topic(s) {unknown}; expected some of {list(TOPICS)}")
 
-FloatArray = NDArray[np.float64]
-
-RESULTS_PATH = Path(__file__).resolve().parent / "results.json"
-
-TOPICS = ("path_following", "fuzzy", "formation", "thermal", "stereo", "slam")
-"""Modules of bench/ run after the motor benchmarks, each exposing ``run(console)``."""
-
-TEAM_SIZES = (1, 100, 10_000)
-"""Team sizes N of the scaling benchmark (2 N wheel motors)."""
-RECORD_EVERY = {1: 1, 100: 1, 10_000: 100}
-"""record_every per team size: every step, except at N = 10,000 (memory)."""
-REPEATS = {1: 7, 100: 5, 10_000: 3}
-"""Timed repeats per team size (the best counts), after one warm-up run."""
-PEER_REPEATS = 7
-"""Timed rounds of the single-motor comparison (each side once a round)."""
-
-FLOOR_SPEEDUP = 10.0
-"""Floor: firefleet's single-motor loop at least this many times faster than the peer."""
-FLOOR_STEPS_PER_S = 1_000.0
-"""Floor: steps per second at N = 10,000."""
-FLOOR_N = 10_000
-
-LOAD_EPS_S = 1e-9
-"""Width of the ramp that stands for the load step in the peer's input breakpoints."""
-AGREE_TOL_RAD_S = 5e-3
-"""Distance below which a 10 ms sampled loop and the continuous one are called equal."""
-
-SAMPLED_DATA_TOL_RAD_S = 1e-9
-"""Expected agreement of firefleet with the independent simulation of its sampled loop."""
-
-PEER_TIGHT = {"rtol": 1e-10, "atol": 1e-12}
-"""solve_ivp tolerances of the untimed high-accuracy peer run (the peer's own reference)."""
-
-
-# --------------------------------------------------------------------------- helpers
-
-
-def best_of(fn: Callable[[], object], repeats: int) -> tuple[float, list[float]]:
-    """Best wall time [s] of ``repeats`` timed calls of ``fn`` (after one untimed call)."""
-    fn()
-    times: list[float] = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), times
-
-
-def best_of_interleaved(
-    fns: dict[str, Callable[[], object]], rounds: int
-) -> dict[str, tuple[float, list[float]]]:
-    """Like :func:`best_of` for several contestants timed in turn, round after round.
-
-    Interleaving exposes every contestant to the same background load, which keeps
-    their ratio honest on a shared machine.
-    """
-    for fn in fns.values():
-        fn()
-    times: dict[str, list[float]] = {name: [] for name in fns}
-    for _ in range(rounds):
-        for name, fn in fns.items():
-            t0 = time.perf_counter()
-            fn()
-            times[name].append(time.perf_counter() - t0)
-    return {name: (min(ts), ts) for name, ts in times.items()}
-
-
-def tracemalloc_peak_mb(fn: Callable[[], object]) -> float:
-    """Peak of the memory traced (Python and numpy allocations) during one call [MB]."""
-    tracemalloc.start()
-    try:
-        tracemalloc.reset_peak()
-        fn()
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-    return peak / 1e6
-
-
-def max_rss_mb() -> float:
-    """The process's peak resident set size so far [MB] (Linux reports kB)."""
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return rss / 1e6 if sys.platform == "darwin" else rss / 1e3
-
-
-def cpu_count() -> int:
-    """CPUs this process may run on (the affinity mask where the OS has one)."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
-
-
-def load_average() -> list[float] | None:
-    """The 1, 5 and 15 minute load averages (None where the OS has none)."""
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except (AttributeError, OSError):
-        return None
-
-
-def machine_info() -> dict[str, Any]:
-    """Versions and hardware the numbers were measured with."""
-    return {
-        "python": platform.python_version(),
-        "python_implementation": platform.python_implementation(),
-        "numpy": np.__version__,
-        "scipy": scipy.__version__,
-        "control": ct.__version__,
-        "firefleet": firefleet.__version__,
-        "platform": platform.platform(),
-        "machine": platform.machine(),
-        "processor": platform.processor(),
-        "cpu_count": cpu_count(),
-        "os_cpu_count": os.cpu_count(),
-        "date_utc": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
-        "load_average_1_5_15_at_start": load_average(),
-        "blas_threads_env": {v: os.environ.get(v) for v in BLAS_THREAD_VARS},
-    }
-
-
-def team(base: Scenario, n: int) -> Scenario:
-    """``base`` with N robots, all at the origin."""
-    return dataclasses.replace(base, poses=((0.0, 0.0, 0.0),) * n)
-
-
-def same_loop(base: Scenario) -> Scenario:
-    """``base`` as the peer's loop: ideal speed sensor and no derivative (a PI).
-
-    ``counts_per_rev = 0`` measures the speed exactly as the angle difference over the
-    window; ``window_steps = 1`` takes that difference over one 10 ms period, the
-    closest firefleet has to the peer's instantaneous speed.
-    """
-    return dataclasses.replace(
-        base,
-        encoder=dataclasses.replace(base.encoder, counts_per_rev=0, window_steps=1),
-        speed_pid=dataclasses.replace(base.speed_pid, kd=0.0),
-    )
-
-
-def fmt_rate(x: float) -> str:
-    """A rate with thousands separators and no decimals."""
-    return f"{x:,.0f}"
-
-
-def verdict(ok: bool) -> str:
-    """PASS/FAIL, coloured for rich."""
-    return "[bold green]PASS[/]" if ok else "[bold red]FAIL[/]"
-
-
-# --------------------------------------------------------------------- 1. scaling
-
-
-def bench_team(base: Scenario, n: int, console: Console) -> dict[str, Any]:
-    """Time the motor-pid scenario for N robots and measure the memory of one run."""
-    scn = team(base, n)
-    every = RECORD_EVERY[n]
-    repeats = REPEATS[n]
-    console.print(f"  N = {n:>6,}: {repeats} timed runs, record_every = {every} ...")
-
-    def run() -> SimResult:
-        return firefleet.simulate(scn, record_every=every)
-
-    best, times = best_of(run, repeats)
-    peak_mb = tracemalloc_peak_mb(run)
-    result = run()
-    recorded_mb = sum(a.nbytes for a in result.arrays().values()) / 1e6
-    steps = scn.n_steps
-    return {
-        "n_robots": n,
-        "backend": "scalar" if n <= SCALAR_MAX_ROBOTS else "array",
-        "n_motors": 2 * n,
-        "steps": steps,
-        "simulated_s": scn.duration_s,
-        "record_every": every,
-        "recorded_samples": int(result.t.size),
-        "repeats": repeats,
-        "times_s": times,
-        "best_s": best,
-        "steps_per_s": steps / best,
-        "robot_steps_per_s": n * steps / best,
-        "motor_steps_per_s": 2 * n * steps / best,
-        "us_per_step": 1e6 * best / steps,
-        "tracemalloc_peak_mb": peak_mb,
-        "recorded_arrays_mb": recorded_mb,
-        "max_rss_after_mb": max_rss_mb(),
-    }
-
-
-# ------------------------------------------------------------------------ 2. peer
-
-
-def peer_system(motor: MotorParams, pid: PidParams) -> Any:
-    """The motor and the saturated PI as interconnected python-control nonlinear systems.
-
-    Inputs ``r`` (speed reference [rad/s]) and ``tau`` (load torque [N m]); outputs
-    ``w`` (speed [rad/s]) and ``V`` (voltage [V]); states motor ``i``, ``w`` and the
-    PI's integral ``I``.
-    """
-    R, L, J = motor.resistance_ohm, motor.inductance_h, motor.inertia_kg_m2
-    B, Ke, Kt = motor.damping_n_m_s, motor.back_emf_v_s, motor.torque_n_m_a
-    kp, ki, b = pid.kp, pid.ki, pid.setpoint_weight
-    Tt, umax = pid.tracking_time_s, pid.output_limit
-
-    def motor_rhs(t: float, x: FloatArray, u: FloatArray, params: Any) -> FloatArray:
-        i, w = x[0], x[1]
-        v, tau = u[0], u[1]
-        return np.array([(v - R * i - Ke * w) / L, (Kt * i - B * w - tau) / J])
-
-    def motor_out(t: float, x: FloatArray, u: FloatArray, params: Any) -> FloatArray:
-        return np.array([x[1]])
-
-    def pi_law(x: FloatArray, u: FloatArray) -> tuple[float, float]:
-        v = kp * (b * u[0] - u[1]) + x[0]
-        return float(v), min(max(float(v), -umax), umax)
-
-    def pi_rhs(t: float, x: FloatArray, u: FloatArray, params: Any) -> FloatArray:
-        v, v_sat = pi_law(x, u)
-        return np.array([ki * (u[0] - u[1]) + (v_sat - v) / Tt])
-
-    def pi_out(t: float, x: FloatArray, u: FloatArray, params: Any) -> FloatArray:
-        return np.array([pi_law(x, u)[1]])
-
-    plant = ct.nlsys(
-        motor_rhs, motor_out, inputs=["V", "tau"], outputs=["w"], states=["i", "w"], name="motor"
-    )
-    controller = ct.nlsys(pi_rhs, pi_out, inputs=["r", "w"], outputs=["V"], states=["I"], name="pi")
-    return ct.interconnect(
-        [plant, controller], inputs=["r", "tau"], outputs=["w", "V"], name="loop"
-    )
-
-
-def peer_inputs(scn: Scenario) -> tuple[FloatArray, FloatArray]:
-    """Breakpoints and values of the peer's inputs (python-control interpolates linearly).
-
-    The reference is on from t = 0; the load steps at ``load.start_s``, written as a
-    1 ns ramp. Inputs given only on the 10 ms output grid would ramp the load over the
-    10 ms before the step, which alone moves the speed by 0.08 rad/s.
-    """
-    assert isinstance(scn.command, WheelSpeedStep)
-    r = scn.command.speed_rad_s
-    t_load, tau = scn.load.start_s, scn.load.torque_n_m
-    t_u = np.array([0.0, t_load - LOAD_EPS_S, t_load, scn.duration_s])
-    u = np.array([[r, r, r, r], [0.0, 0.0, tau, tau]])
-    return t_u, u
-
-
-def run_peer(
-    system: Any, scn: Scenario, t_eval: FloatArray, solve_ivp_kwargs: dict[str, float] | None
-) -> tuple[FloatArray, FloatArray]:
-    """Simulate the peer; speed [rad/s] and voltage [V] at ``t_eval``."""
-    t_u, u = peer_inputs(scn)
-    resp = ct.input_output_response(
-        system,
-        t_u,
-        u,
-        np.zeros(3),
-        evaluation_times=t_eval,
-        solve_ivp_kwargs=solve_ivp_kwargs,
-    )
-    y = np.asarray(resp.outputs, dtype=np.float64)
-    return y[0], y[1]
-
-
-def sampled_data_reference(scn: Scenario) -> FloatArray:
-    """An independent simulation of the loop firefleet models, for N = 1.
-
-    The discrete PI (kd = 0) every ``dt`` from the speed measured as the angle turned
-    over the last period, its voltage held while scipy's DOP853 integrates the
-    continuous motor and shaft angle (tight tolerances) over the period: no matrix
-    exponential, no firefleet code. Returns the true speed at each step [rad/s].
-    """
-    m, p = scn.motor, scn.speed_pid
-    assert isinstance(scn.command, WheelSpeedStep)
-    assert scn.encoder.counts_per_rev == 0
-    assert scn.encoder.window_steps == 1
-    assert p.kd == 0
-    R, L, J = m.resistance_ohm, m.inductance_h, m.inertia_kg_m2
-    B, Ke, Kt = m.damping_n_m_s, m.back_emf_v_s, m.torque_n_m_a
-    h, n = scn.dt_s, scn.n_steps
-    r = scn.command.speed_rad_s
-
-    def rhs(t: float, x: FloatArray, v: float, tau: float) -> FloatArray:
-        return np.array([(v - R * x[0] - Ke * x[1]) / L, (Kt * x[0] - B * x[1] - tau) / J, x[1]])
-
-    x = np.zeros(3)
-    y = 0.0
-    integral = 0.0
-    w = np.empty(n + 1)
-    for k in range(n + 1):
-        w[k] = x[1]
-        if k == n:
-            break
-        t = k * h
-        tau = scn.load.torque_n_m if t >= scn.load.start_s - 1e-9 else 0.0
-        v = p.kp * (p.setpoint_weight * r - y) + integral
-        v_sat = min(max(v, -p.output_limit), p.output_limit)
-        integral += h * (p.ki * (r - y) + (v_sat - v) / p.tracking_time_s)
-        sol = scipy.integrate.solve_ivp(
-            rhs, (0.0, h), x, method="DOP853", rtol=1e-12, atol=1e-14, args=(v_sat, tau)
-        )
-        x_next = sol.y[:, -1]
-        y = float(x_next[2] - x[2]) / h
-        x = x_next
-    return w
-
-
-def diff_stats(t: FloatArray, a: FloatArray, b: FloatArray, t_load: float) -> dict[str, float]:
-    """max |a - b| over the run, before and after the load step, and where it peaks."""
-    d = np.abs(a - b)
-    before = t < t_load
-    return {
-        "max_abs_rad_s": float(d.max()),
-        "at_s": float(t[int(np.argmax(d))]),
-        "max_abs_before_load_rad_s": float(d[before].max()),
-        "max_abs_after_load_rad_s": float(d[~before].max()),
-        "rms_rad_s": float(np.sqrt(np.mean(d * d))),
-    }
-
-
-def bench_peer(base: Scenario, console: Console) -> dict[str, Any]:
-    """Time and compare firefleet's single-motor PI loop with python-control's."""
-    scn = same_loop(team(base, 1))
-    t_eval = np.linspace(0.0, scn.duration_s, scn.n_steps + 1)
-    system = peer_system(scn.motor, scn.speed_pid)
-
-    builtin = team(base, 1)
-    console.print(
-        f"  firefleet (same loop, built-in motor-pid) and python-control: {PEER_REPEATS} "
-        "interleaved rounds ..."
-    )
-    timings = best_of_interleaved(
-        {
-            "ours": lambda: firefleet.simulate(scn),
-            "peer": lambda: run_peer(system, scn, t_eval, None),
-            "builtin": lambda: firefleet.simulate(builtin),
-            "ours_array": lambda: firefleet.simulate(scn, backend="array"),
-        },
-        PEER_REPEATS,
-    )
-    ours_best, ours_times = timings["ours"]
-    peer_best, peer_times = timings["peer"]
-    builtin_best, builtin_times = timings["builtin"]
-    array_best, array_times = timings["ours_array"]
-
-    console.print("  agreement checks (untimed) ...")
-    ours = firefleet.simulate(scn)
-    if not np.allclose(ours.t, t_eval, rtol=0, atol=1e-12):
-        raise RuntimeError("firefleet's samples are not on the peer's time grid")
-    w_ours = ours.wheel_speed_rad_s[:, 0, 0]
-    v_ours = ours.voltage_v[:, 0, 0]
-    wheels_equal = bool(np.array_equal(w_ours, ours.wheel_speed_rad_s[:, 0, 1]))
-    w_peer, v_peer = run_peer(system, scn, t_eval, None)
-    t0 = time.perf_counter()
-    w_tight, _ = run_peer(system, scn, t_eval, PEER_TIGHT)
-    tight_s = time.perf_counter() - t0
-
-    # Evidence for where a difference comes from: firefleet against an independent
-    # simulation of its own (sampled-data) loop, and firefleet with a 10x shorter step.
-    t0 = time.perf_counter()
-    w_ref = sampled_data_reference(scn)
-    ref_s = time.perf_counter() - t0
-    fine = dataclasses.replace(scn, dt_s=scn.dt_s / 10)
-    stride = round(scn.dt_s / fine.dt_s)
-    w_fine = firefleet.simulate(fine, record_every=stride).wheel_speed_rad_s[:, 0, 0]
-    t_load = scn.load.start_s
-
-    agreement = {
-        "ours_vs_peer": diff_stats(t_eval, w_ours, w_peer, t_load),
-        "ours_vs_peer_tight": diff_stats(t_eval, w_ours, w_tight, t_load),
-        "peer_default_vs_peer_tight": diff_stats(t_eval, w_peer, w_tight, t_load),
-        "ours_vs_independent_sampled_data": diff_stats(t_eval, w_ours, w_ref, t_load),
-        "ours_dt_1ms_vs_peer_tight": diff_stats(t_eval, w_fine, w_tight, t_load),
-    }
-    return {
-        "scenario": {
-            "base": base.name,
-            "encoder_counts_per_rev": scn.encoder.counts_per_rev,
-            "encoder_window_steps": scn.encoder.window_steps,
-            "kp": scn.speed_pid.kp,
-            "ki": scn.speed_pid.ki,
-            "kd": scn.speed_pid.kd,
-            "setpoint_weight": scn.speed_pid.setpoint_weight,
-            "tracking_time_s": scn.speed_pid.tracking_time_s,
-            "output_limit_v": scn.speed_pid.output_limit,
-            "dt_s": scn.dt_s,
-            "steps": scn.n_steps,
-            "load_torque_n_m": scn.load.torque_n_m,
-            "load_start_s": t_load,
-        },
-        "peer": {
-            "api": "control.nlsys x2 + control.interconnect + control.input_output_response",
-            "solver": "solve_ivp RK45, default tolerances (rtol 1e-3, atol 1e-6)",
-            "evaluation_times": "np.linspace(0, 10, 1001)",
-            "derivative": "none (PI)",
-            "encoder": "none (exact speed)",
-            "anti_windup": "back-calculation, same T_t as firefleet (never active: |V| < 12 V)",
-        },
-        "ours_best_s": ours_best,
-        "ours_times_s": ours_times,
-        "peer_best_s": peer_best,
-        "peer_times_s": peer_times,
-        "speedup_peer_over_ours": peer_best / ours_best,
-        "builtin_motor_pid_n1_best_s": builtin_best,
-        "builtin_motor_pid_n1_times_s": builtin_times,
-        "ours_array_backend_best_s": array_best,
-        "ours_array_backend_times_s": array_times,
-        "speedup_peer_over_builtin_n1": peer_best / builtin_best,
-        "peer_tight_time_s": tight_s,
-        "independent_reference_time_s": ref_s,
-        "max_abs_voltage_ours_v": float(np.abs(v_ours).max()),
-        "max_abs_voltage_peer_v": float(np.abs(v_peer).max()),
-        "wheels_identical": wheels_equal,
-        "agreement": agreement,
-        "agree_tolerance_rad_s": AGREE_TOL_RAD_S,
-        "agrees": agreement["ours_vs_peer"]["max_abs_rad_s"] <= AGREE_TOL_RAD_S,
-    }
-
-
-# ----------------------------------------------------------------------- report
-
-
-def print_team_table(console: Console, rows: list[dict[str, Any]]) -> None:
-    """The scaling table."""
-    table = Table(title="1. firefleet motor-pid scenario (10 s, 1000 steps) by team size")
-    for name in (
-        "N robots",
-        "backend",
-        "motors",
-        "record_every",
-        "best (s)",
-        "us/step",
-        "steps/s",
-        "robot-steps/s",
-        "tracemalloc peak (MB)",
-        "recorded arrays (MB)",
-    ):
-        table.add_column(name, justify="right")
-    for row in rows:
-        table.add_row(
-            f"{row['n_robots']:,}",
-            row["backend"],
-            f"{row['n_motors']:,}",
-            str(row["record_every"]),
-            f"{row['best_s']:.4f}",
-            f"{row['us_per_step']:.1f}",
-            fmt_rate(row["steps_per_s"]),
-            fmt_rate(row["robot_steps_per_s"]),
-            f"{row['tracemalloc_peak_mb']:.1f}",
-            f"{row['recorded_arrays_mb']:.1f}",
-        )
-    console.print(table)
-    console.print(
-        "  best of the timed repeats (after a warm-up run); N = 10,000 records every 100th "
-        "step (11 samples) to keep memory small, N = 1 and 100 record every step; memory is "
-        "the tracemalloc peak of one separate, untimed run."
-    )
-
-
-def print_peer_tables(console: Console, peer: dict[str, Any]) -> None:
-    """The timing and the agreement tables of the comparison."""
-    table = Table(title="2. Single-motor 10 s PI loop: firefleet vs python-control")
-    table.add_column("simulation")
-    table.add_column("best (s)", justify="right")
-    table.add_column("runs", justify="right")
-    table.add_column("peer time / this", justify="right")
-    table.add_row(
-        "python-control nlsys+interconnect, input_output_response (RK45 defaults)",
-        f"{peer['peer_best_s']:.4f}",
-        str(len(peer["peer_times_s"])),
-        "1.0",
-    )
-    table.add_row(
-        "firefleet, same loop (ideal encoder, window 1, kd = 0)",
-        f"{peer['ours_best_s']:.4f}",
-        str(len(peer["ours_times_s"])),
-        f"{peer['speedup_peer_over_ours']:.2f}x",
-    )
-    table.add_row(
-        "firefleet, same loop, array backend (NumPy; teams > 8 robots)  (info)",
-        f"{peer['ours_array_backend_best_s']:.4f}",
-        str(len(peer["ours_array_backend_times_s"])),
-        f"{peer['peer_best_s'] / peer['ours_array_backend_best_s']:.2f}x",
-    )
-    table.add_row(
-        "firefleet, motor-pid as built in (2048-count encoder, PID)  (info)",
-        f"{peer['builtin_motor_pid_n1_best_s']:.4f}",
-        str(len(peer["builtin_motor_pid_n1_times_s"])),
-        f"{peer['speedup_peer_over_builtin_n1']:.2f}x",
-    )
-    console.print(table)
-    console.print(
-        "  peer: no derivative, no encoder quantisation, continuous-time PI; firefleet: the "
-        "same PI law sampled every 10 ms (zero-order hold), speed measured as the angle "
-        "turned over the last period. firefleet's N = 1 is one robot: two wheel motors "
-        "and the pose, the peer one motor. Only the simulation call is timed."
-    )
-
-    labels = {
-        "ours_vs_peer": "firefleet (10 ms) vs python-control (RK45 defaults)",
-        "ours_vs_peer_tight": "firefleet (10 ms) vs python-control (rtol 1e-10)",
-        "peer_default_vs_peer_tight": "python-control defaults vs rtol 1e-10 (its solver error)",
-        "ours_vs_independent_sampled_data": (
-            "firefleet vs independent sampled-data sim (DOP853 per 10 ms)"
-        ),
-        "ours_dt_1ms_vs_peer_tight": "firefleet at dt = 1 ms vs python-control (rtol 1e-10)",
-    }
-    table = Table(title="Agreement of the speed traces, |w_a - w_b| on the 1001-point grid")
-    table.add_column("pair")
-    table.add_column("max (rad/s)", justify="right")
-    table.add_column("at t (s)", justify="right")
-    table.add_column("max t < 5 s", justify="right")
-    table.add_column("max t >= 5 s", justify="right")
-    table.add_column("rms", justify="right")
-    for key, label in labels.items():
-        d = peer["agreement"][key]
-        table.add_row(
-            label,
-            f"{d['max_abs_rad_s']:.3e}",
-            f"{d['at_s']:.2f}",
-            f"{d['max_abs_before_load_rad_s']:.3e}",
-            f"{d['max_abs_after_load_rad_s']:.3e}",
-            f"{d['rms_rad_s']:.3e}",
-        )
-    console.print(table)
-    main = peer["agreement"]["ours_vs_peer"]["max_abs_rad_s"]
-    console.print(
-        f"  max |w_ours - w_peer| = {main:.3e} rad/s "
-        + ("(within " if peer["agrees"] else "(more than ")
-        + f"{AGREE_TOL_RAD_S:.0e} rad/s)"
-        + f"; peak |V| ours {peer['max_abs_voltage_ours_v']:.3f} V, "
-        f"peer {peer['max_abs_voltage_peer_v']:.3f} V (saturation at 12 V never reached)."
-    )
-    if peer["agrees"]:
-        return
-    ref = peer["agreement"]["ours_vs_independent_sampled_data"]["max_abs_rad_s"]
-    fine = peer["agreement"]["ours_dt_1ms_vs_peer_tight"]["max_abs_rad_s"]
-    coarse = peer["agreement"]["ours_vs_peer_tight"]["max_abs_rad_s"]
-    if ref <= SAMPLED_DATA_TOL_RAD_S and fine <= 0.2 * coarse:
-        console.print(
-            "  Why they differ: firefleet matches an independent simulation of its own "
-            f"sampled-data loop to {ref:.1e} rad/s, and its distance to the continuous-time "
-            f"peer falls from {coarse:.1e} to {fine:.1e} rad/s when the controller step "
-            "shrinks 10x (first order in dt). The difference is the 10 ms sample-and-hold "
-            "controller (about one period of loop delay: half from the zero-order hold, "
-            "half from measuring speed as the angle turned over the last period) against a "
-            "continuous one, not a solver error and not an engine bug."
-        )
-    else:
-        console.print(
-            "  [bold red]UNEXPLAINED DIFFERENCE[/]: firefleet vs an independent sampled-data "
-            f"simulation differs by {ref:.1e} rad/s (expected <= {SAMPLED_DATA_TOL_RAD_S:.0e}), "
-            f"or the difference does not shrink with dt ({coarse:.1e} at 10 ms, {fine:.1e} at "
-            "1 ms): investigate the engine."
-        )
-
-
-def print_floors(console: Console, floors: list[dict[str, Any]]) -> None:
-    """The floors table."""
-    table = Table(title="3. Floors (a measurement: the exit status is 0 either way)")
-    table.add_column("floor")
-    table.add_column("required", justify="right")
-    table.add_column("measured", justify="right")
-    table.add_column("verdict", justify="center")
-    for f in floors:
-        table.add_row(f["name"], f["required"], f["measured"], verdict(f["pass"]))
-    console.print(table)
-
-
-# ------------------------------------------------------------------------- main
-
-
-BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
-
-
-def single_threaded_blas() -> None:
-    """Re-run this script with one BLAS thread unless the caller chose a number.
-
-    Neither side's hot loop calls BLAS, but OpenBLAS workers woken by one small matrix
-    call (firefleet's ``expm`` at the start of every run) busy-wait for a while: on a
-    shared two-CPU machine they took a whole CPU and doubled single runs whenever another
-    process wanted it. One thread removes that noise and changes no quiet-machine time.
-    The variables only take effect before numpy loads, hence the re-execution.
-    """
-    if os.name != "posix" or any(v in os.environ for v in BLAS_THREAD_VARS):
-        return
-    env = {**os.environ, **dict.fromkeys(BLAS_THREAD_VARS, "1")}
-    os.execve(sys.executable, [sys.executable, *sys.argv], env)
-
-
-def main() -> int:
-    """Run every measurement, print the tables, write ``bench/results.json``."""
-    single_threaded_blas()
     console = Console(width=None if sys.stdout.isatty() else 130)
     start = time.perf_counter()
-    info = machine_info()
-    console.print(
-        f"[bold]firefleet bench[/]: Python {info['python']}, numpy {info['numpy']}, "
-        f"scipy {info['scipy']}, control {info['control']}, {info['cpu_count']} CPU(s), "
-        f"{info['platform']}, load average {info['load_average_1_5_15_at_start']}"
-    )
-    console.print(
-        "  (timings are best-of-repeats; other processes on a shared machine inflate "
-        "single runs, the best of several is the machine's capability)"
-    )
-    base = firefleet.load_scenario("motor-pid")
+    machine, commit = h.machine_info(), git_commit()
+    console.print(f"[bold]firefleet bench[/] at {commit}: {h.machine_line(machine)}")
+    results: dict[str, h.TopicResult] = {}
+    failed: dict[str, str] = {}
+    for name in topics:
+        console.rule(f"bench/{name}.py")
+        try:  # one broken topic must not lose the others' numbers
+            results[name] = topic_result(name, importlib.import_module(name).run(console))
+        except Exception as exc:  # reported below and in the exit status
+            failed[name] = f"{type(exc).__name__}: {exc}"
+            console.print_exception()
 
-    console.print("[bold]1. team scaling[/]")
-    rows = [bench_team(base, n, console) for n in TEAM_SIZES]
-    console.print("[bold]2. python-control peer[/]")
-    peer = bench_peer(base, console)
-
-    big = next(r for r in rows if r["n_robots"] == FLOOR_N)
-    floors = [
-        {
-            "name": "single-motor 10 s PI loop: python-control time / firefleet time",
-            "required": f">= {FLOOR_SPEEDUP:g}x",
-            "measured": f"{peer['speedup_peer_over_ours']:.2f}x",
-            "value": peer["speedup_peer_over_ours"],
-            "threshold": FLOOR_SPEEDUP,
-            "pass": peer["speedup_peer_over_ours"] >= FLOOR_SPEEDUP,
-        },
-        {
-            "name": f"N = {FLOOR_N:,} robots ({2 * FLOOR_N:,} motors): steps per second",
-            "required": f">= {FLOOR_STEPS_PER_S:,.0f}",
-            "measured": fmt_rate(big["steps_per_s"]),
-            "value": big["steps_per_s"],
-            "threshold": FLOOR_STEPS_PER_S,
-            "pass": big["steps_per_s"] >= FLOOR_STEPS_PER_S,
-        },
-    ]
-
-    console.print()
-    print_team_table(console, rows)
-    console.print()
-    print_peer_tables(console, peer)
-    console.print()
-    print_floors(console, floors)
-
-    topics: dict[str, Any] = {}
-    for name in TOPICS:
-        console.print()
-        console.print(f"[bold]bench/{name}.py[/]")
-        topics[name] = importlib.import_module(name).run(console)
-
+    rows = {r.key: r for res in results.values() for r in res.rows}
+    floors = h.collect_floors(ISSUE_12, results, "issue 12")
+    console.rule("summary")
+    console.print(h.floors_table(floors, "Floors (a measurement: the exit status is 0 either way)"))
+    comparisons: list[h.Comparison] = []
+    if args.baseline.exists():
+        base = h.load_baseline(args.baseline)
+        comparisons = h.compare(rows.values(), base)
+        title = f"Rows against {args.baseline.name} (slowdown > 1: slower or bigger than then)"
+        console.print(h.comparison_table(comparisons, title))
+        console.print(h.regression_summary(comparisons, rows, base))
+    for name, why in failed.items():
+        console.print(f"[bold red]bench/{name}.py failed[/]: {why} (no rows, no floors)")
     total = time.perf_counter() - start
     document = {
-        "machine": info,
-        "team_scaling": rows,
-        "single_motor_comparison": peer,
-        "floors": floors,
-        "topics": topics,
-        "process_max_rss_mb": max_rss_mb(),
-        "load_average_1_5_15_at_end": load_average(),
+        "commit": commit,
+        "machine": machine,
+        "load_average_at_end": h.machine_info()["load_average_1_5_15"],
         "bench_wall_time_s": total,
+        "process_max_rss_mb": h.max_rss_bytes() / 1e6,
+        "floors": [{"source": s, **f.to_dict()} for s, f in floors],
+        "regressions": [c.row.key for c in h.regressions(comparisons)],
+        "slowdown_vs_baseline": {c.row.key: c.slowdown for c in comparisons},
+        "topics": {name: res.to_dict() for name, res in results.items()},
+        "failed_topics": failed,
     }
-    RESULTS_PATH.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
-    console.print(f"wrote {RESULTS_PATH} (bench took {total:.1f} s)")
-    return 0
+    h.write_results(args.out, document)
+    if args.write_baseline:
+        h.write_results(args.write_baseline, h.baseline_document(rows.values(), machine, commit))
+    console.print(f"wrote {args.out} (bench took {total:.1f} s)")
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

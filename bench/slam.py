@@ -11,8 +11,11 @@ returns every number as a JSON-able dict. Run directly: ``python bench/slam.py``
    the previous tuning); reference: GTSAM's batch optimum
    (iSAM2 over the poses in order, then Levenberg-Marquardt over all factors, from gtsam's
    ``load2D`` reading of the same file). Absolute trajectory error after rigid alignment.
-2. Peer: PythonRobotics ``SLAM/FastSLAM1/fast_slam1.py`` imported from the fetched mirror
-   (``/work/.mirror/AtsushiSakai+PythonRobotics``, never copied into this repository) on
+   1b: the command a user runs, ``firefleet slam victoria_park.txt --seed S`` with no
+   other option (300 particles), for S = 1, 2, 3: ATE and wall time of the command.
+   The data is read from ``../shared/data`` beside the repository or ``$FIREFLEET_DATA``.
+2. Peer: PythonRobotics ``SLAM/FastSLAM1/fast_slam1.py`` imported from a peer copy
+   (a checkout or git directory named by ``$PYTHONROBOTICS``, never copied here) on
    its own scenario (8 RFID landmarks, its noise, 100 particles, 50 s at 0.1 s). The
    scenario is generated once with the peer's own ``observation`` function, then both
    filters run on the same inputs; firefleet's FastSLAM 1.0 gets the peer's motion noise
@@ -51,12 +54,17 @@ from firefleet.estimation.fastslam import (
     fastslam_init,
     fastslam_step,
     run_fastslam,
+    slam_claims,
     slam_summary,
 )
 from firefleet.estimation.logs import SlamLog, gtsam_text, read_log
 
-VICTORIA = Path("/work/shared/data/slam/victoria_park.txt")
-MIRROR = Path("/work/.mirror/AtsushiSakai+PythonRobotics/repo")
+REPO = Path(__file__).resolve().parents[1]
+DATA = Path(os.environ.get("FIREFLEET_DATA", REPO.parent / "shared" / "data"))
+"""The shared data folder: ``../shared/data`` beside the repository, or ``$FIREFLEET_DATA``."""
+VICTORIA = DATA / "slam" / "victoria_park.txt"
+PEER_ENV = "PYTHONROBOTICS"
+"""Environment variable naming a PythonRobotics checkout (or its bare git directory)."""
 SEEDS = tuple(range(20))
 FLOOR_ATE_M = 5.0
 FLOOR_TIME_S = 60.0
@@ -114,20 +122,63 @@ def gtsam_optimum(log: SlamLog, path: Path) -> tuple[np.ndarray, float, float]:
     return ref, float(graph.error(best)), seconds
 
 
-_CALIBRATED = FastSlamParams(
-    version=2, odometry_noise_scale=2.0, heading_drift_sigma=0.003, turn_scale_sigma=0.05
-)
+_CALIBRATED = FastSlamParams(version=2)  # the defaults: calibrated, sigmas x 2
 VP_CONFIGS: tuple[tuple[str, FastSlamParams], ...] = (
     ("calibrated, x2", _CALIBRATED),
-    ("white noise, x4", FastSlamParams(version=2, odometry_noise_scale=4.0)),
+    (
+        "white noise, x4",
+        replace(
+            _CALIBRATED, odometry_noise_scale=4.0, heading_drift_sigma=0.0, turn_scale_sigma=0.0
+        ),
+    ),
     ("calibrated, x2", replace(_CALIBRATED, n_particles=300)),
 )
+
+
+DEFAULT_SEEDS = (1, 2, 3)
+
+
+def bench_default_command(console: Console, ref: np.ndarray) -> dict[str, Any]:
+    """``firefleet slam victoria_park.txt --seed S`` with no other option, S = 1, 2, 3.
+
+    Each run is the command itself in a fresh process (its wall time includes start-up
+    and numba's compiled-kernel cache); its ``trajectory.csv`` is compared with GTSAM's
+    optimum ``ref`` (T, 2) by the ATE after rigid alignment.
+    """
+    runs: list[dict[str, Any]] = []
+    code = "import sys; from firefleet.cli import main; sys.exit(main(sys.argv[1:]))"
+    for seed in DEFAULT_SEEDS:
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp) / "vp"
+            args = [str(VICTORIA), "--seed", str(seed), "--out", str(out), "--no-plots"]
+            t0 = time.perf_counter()
+            proc = subprocess.run(
+                [sys.executable, "-c", code, "slam", *args], capture_output=True, check=False
+            )
+            wall = time.perf_counter() - t0
+            if proc.returncode != 0:
+                raise RuntimeError(f"firefleet slam exited {proc.returncode}: {proc.stderr!r}")
+            path = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)[:, 1:3]
+        runs.append(
+            {"seed": seed, "ate_m": absolute_trajectory_error(path, ref), "wall_time_s": wall}
+        )
+    table = Table(title="1b. firefleet slam victoria_park.txt --seed S (default options)")
+    for col in ("seed", "ATE vs GTSAM (m)", "wall time (s)"):
+        table.add_column(col, justify="right")
+    for r in runs:
+        table.add_row(str(r["seed"]), f"{r['ate_m']:.2f}", f"{r['wall_time_s']:.1f}")
+    console.print(table)
+    return {
+        "runs": runs,
+        "median_ate_m": float(np.median([r["ate_m"] for r in runs])),
+        "max_wall_time_s": max(r["wall_time_s"] for r in runs),
+    }
 
 
 def bench_victoria(console: Console) -> dict[str, Any]:
     """Whole Victoria Park set: ATE against GTSAM and run time, over SEEDS, two tunings."""
     if not VICTORIA.exists():
-        console.print(f"  {VICTORIA} absent: Victoria Park skipped")
+        console.print(f"  {VICTORIA} absent (set $FIREFLEET_DATA): Victoria Park skipped")
         return {"skipped": True}
     log = read_log(VICTORIA)
     console.print("  GTSAM reference (iSAM2 + Levenberg-Marquardt) ...")
@@ -184,9 +235,11 @@ def bench_victoria(console: Console) -> dict[str, Any]:
         )
     console.print(table)
     console.print(f"  odometry-only ATE {ate_odo:.1f} m; GTSAM final error {err:.1f}, {gt_s:.1f} s")
+    default = bench_default_command(console, ref)
     return {
         "poses": log.n_poses,
         "observations": log.n_observations,
+        "default_command": default,
         "configs": configs,
         "median_ate_m": configs[0]["median_ate_m"],
         "odometry_ate_m": ate_odo,
@@ -196,14 +249,22 @@ def bench_victoria(console: Console) -> dict[str, Any]:
     }
 
 
-def _peer_module(tmp: Path) -> Any:
-    """PythonRobotics' fast_slam1 module, extracted from the mirror into ``tmp``."""
-    git_dir = MIRROR
+def _peer_path() -> Path | None:
+    """The PythonRobotics checkout or git directory of ``$PYTHONROBOTICS``, if present."""
+    value = os.environ.get(PEER_ENV)
+    return Path(value) if value and Path(value).exists() else None
+
+
+def _peer_module(peer: Path, tmp: Path) -> Any:
+    """PythonRobotics' fast_slam1 module, extracted from ``peer`` into ``tmp``."""
     for rel in ("SLAM/FastSLAM1/fast_slam1.py", "utils/angle.py", "utils/__init__.py"):
         out = tmp / rel
         out.parent.mkdir(parents=True, exist_ok=True)
-        text = subprocess.run(
-            ["git", f"--git-dir={git_dir}", "show", f"HEAD:{rel}"],
+        if (peer / rel).exists():  # a checkout
+            out.write_text((peer / rel).read_text())
+            continue
+        text = subprocess.run(  # a git directory (a mirror)
+            ["git", f"--git-dir={peer}", "show", f"HEAD:{rel}"],
             capture_output=True,
             check=False,
             text=True,
@@ -217,11 +278,12 @@ def _peer_module(tmp: Path) -> Any:
 
 def bench_peer(console: Console) -> dict[str, Any]:
     """Both FastSLAM 1.0s on the peer's own scenario, same inputs, one run each."""
-    if not MIRROR.exists():
-        console.print(f"  peer mirror {MIRROR} absent: peer comparison skipped")
+    peer = _peer_path()
+    if peer is None:
+        console.print(f"  PythonRobotics not found (set ${PEER_ENV}): peer comparison skipped")
         return {"skipped": True}
     with tempfile.TemporaryDirectory() as tmp:
-        pr = _peer_module(Path(tmp))
+        pr = _peer_module(peer, Path(tmp))
         rfid = np.array(
             [
                 [10.0, -2.0],
@@ -416,6 +478,7 @@ def bench_simulation(console: Console) -> dict[str, Any]:
                     doc = slam_summary(
                         log, run_fastslam(log, np.random.default_rng(seed), params=prm)
                     )
+                    claims = slam_claims(doc, association=association)
                     runs.append(
                         {
                             "drive": drive,
@@ -424,7 +487,7 @@ def bench_simulation(console: Console) -> dict[str, Any]:
                             "landmark_rms_m": doc["landmark_rms_m"],
                             "odometry_position_rms_m": doc["odometry_position_rms_m"],
                             "duplicate_landmarks": doc["duplicate_landmarks"],
-                            "all_claims": all(c["passed"] for c in doc["claims"]),
+                            "all_claims": all(c.holds(doc[c.metric]) for c in claims),
                         }
                     )
             rows.append({"version": version, "association": association, "runs": runs})
@@ -478,6 +541,23 @@ def run(console: Console) -> dict[str, Any]:
                 f"< {FLOOR_TIME_S} s",
                 f"{vp['max_run_time_s']:.2f} s",
                 vp["max_run_time_s"] < FLOOR_TIME_S,
+            )
+        )
+        dflt = vp["default_command"]
+        floors.append(
+            (
+                "Victoria Park, default options, median ATE (seeds 1-3)",
+                f"<= {FLOOR_ATE_M} m",
+                f"{dflt['median_ate_m']:.2f} m",
+                dflt["median_ate_m"] <= FLOOR_ATE_M,
+            )
+        )
+        floors.append(
+            (
+                "Victoria Park, default options, each command",
+                f"< {FLOOR_TIME_S} s",
+                f"{dflt['max_wall_time_s']:.1f} s",
+                dflt["max_wall_time_s"] < FLOOR_TIME_S,
             )
         )
     if not peer.get("skipped"):

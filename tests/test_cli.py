@@ -318,8 +318,11 @@ def test_every_option_help_says_its_default() -> None:
     for name, action in options:
         text = action.help or ""
         assert "default" in text or "required" in text, (name, action.option_strings, text)
-    particles = next(a for n, a in options if n == "slam" and "--particles" in a.option_strings)
-    assert str(particles.default) in (particles.help or "")
+        default = action.default
+        if isinstance(default, int | float) and not isinstance(default, bool):
+            # the number the help names is the number used
+            said = {f"default {default}", f"default {default:g}"}
+            assert any(s in text for s in said), (name, action.option_strings, text)
 
 
 def test_list_prints_one_line_per_scenario_within_80_columns(
@@ -376,3 +379,23 @@ def test_progress_on_a_pipe_is_a_few_plain_lines_on_long_runs() -> None:
         for done in range(1, 11):
             progress(done, 10)
     assert quick.getvalue() == ""  # a short run prints nothing
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["run", "motor-pid", "--seed", "abc"], "argument --seed: invalid int value: 'abc'"),
+        (["run"], "the following arguments are required: SCENARIO"),
+        (["nosuch"], "argument COMMAND: invalid choice: 'nosuch'"),
+    ],
+)
+def test_bad_command_line_is_one_line_naming_the_flag(
+    capsys: pytest.CaptureFixture[str], argv: list[str], fragment: str
+) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    assert fragment in err
+    assert "--help" in err

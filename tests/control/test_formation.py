@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import tracemalloc
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -16,7 +17,10 @@ from firefleet.control.formation import (
     contact_repulsion,
     coulomb_repulsion,
     formation_force,
+    formation_force_and_stiffness,
     obstacle_repulsion,
+    ring_spacing,
+    stiffness_bound,
     tangential_part,
 )
 from firefleet.errors import InputError
@@ -140,14 +144,127 @@ def test_contact_and_obstacle_forces_by_hand() -> None:
     np.testing.assert_allclose(fo, [[0.0, 0.05 * (1 / 0.3 - 2.0) / 0.09], [0.0, 0.0]], rtol=1e-12)
 
 
-def test_regular_polygon_on_the_circle_is_an_equilibrium_of_the_regular_law() -> None:
-    params = FormationParams(alpha_m=3.0, spacing_gain=5.0)
+@pytest.mark.parametrize(
+    ("n", "alpha"), [(3, 3.0), (4, 3.0), (5, 3.0), (8, 3.0), (20, 3.0), (200, 30.0), (1000, 150.0)]
+)
+def test_regular_polygon_on_the_circle_is_an_equilibrium_of_the_regular_law(
+    n: int, alpha: float
+) -> None:
+    params = FormationParams(alpha_m=alpha)
     c = np.array([2.0, 1.0])
-    for n in (3, 4, 5, 8):
-        f = formation_force(_polygon(n, 3.0, (2.0, 1.0)), c, params, law="regular")
-        # attraction 0 on the circle, tangential Coulomb 0 by symmetry, contact out of
-        # range (sides >= 2.3 m): rounding of forces of order 1 N
-        np.testing.assert_allclose(f, 0.0, atol=1e-12)
+    f = formation_force(_polygon(n, alpha, (2.0, 1.0)), c, params, law="regular")
+    # attraction 0 on the circle up to the rounding of r^2 - alpha^2 (~4 alpha^2 eps,
+    # times a r: ~4 a alpha^3 eps, 3e-9 N at 150 m), equal angular gaps (the spacing
+    # force is K_s alpha times differences of equal gaps), contact out of range (sides
+    # >= 0.94 m: gaps 0.64 m > 0.5 m)
+    eps = np.finfo(float).eps
+    np.testing.assert_allclose(f, 0.0, atol=max(1e-11, 10.0 * alpha**3 * eps))
+    # and a perturbed polygon is not
+    moved = _polygon(n, alpha, (2.0, 1.0))
+    moved[0] += 0.1 * (moved[0] - c) / alpha
+    assert np.abs(formation_force(moved, c, params, law="regular")[0]).max() > 0.1
+
+
+def _spacing_by_loop(
+    pos: FloatArray, c: FloatArray, k_s: float, alive: NDArray[np.bool_]
+) -> FloatArray:
+    """Each robot's nearest active neighbours by angle, found by trying every other."""
+    out = np.zeros_like(pos)
+    d = pos - c
+    theta = np.arctan2(d[:, 1], d[:, 0])
+    for k in range(len(pos)):
+        if not alive[k]:
+            continue
+        ahead = behind = 2.0 * math.pi
+        for i in range(len(pos)):
+            if i == k or not alive[i]:
+                continue
+            ahead = min(ahead, (theta[i] - theta[k]) % (2.0 * math.pi))
+            behind = min(behind, (theta[k] - theta[i]) % (2.0 * math.pi))
+        r = math.hypot(d[k, 0], d[k, 1])
+        t = np.array([-d[k, 1], d[k, 0]]) / r
+        out[k] = k_s * r * (ahead - behind) / 2.0 * t
+    return out
+
+
+def test_ring_spacing_equals_a_loop_over_all_robots() -> None:
+    rng = np.random.default_rng(8)
+    pos = rng.uniform(-5.0, 5.0, (40, 2))
+    c = np.array([0.3, -0.2])
+    alive = rng.uniform(size=40) > 0.2
+    f = ring_spacing(pos, c, stiffness_n_m=7.0, active=alive)
+    np.testing.assert_allclose(f, _spacing_by_loop(pos, c, 7.0, alive), rtol=1e-12, atol=1e-12)
+    # the spacing only moves robots along their circles, and the gaps' differences sum
+    # to zero: the tangential forces over r sum to zero
+    d = pos - c
+    ft = (f * np.column_stack([-d[:, 1], d[:, 0]])).sum(axis=1) / (d * d).sum(axis=1)
+    np.testing.assert_allclose((f * d).sum(axis=1), 0.0, atol=1e-12)
+    assert abs(ft.sum()) < 1e-11
+
+
+def test_ring_spacing_is_minus_the_gradient_of_the_gap_energy() -> None:
+    # on the circle, U = K_s alpha^2 / 4 sum_k g_k^2 and the force along the arc is
+    # -dU/ds_k (s = alpha theta): central differences in theta
+    alpha, k_s = 2.0, 3.0
+    rng = np.random.default_rng(3)
+    theta = np.sort(rng.uniform(0.0, 2.0 * math.pi, 7))
+
+    def energy(th: FloatArray) -> float:
+        srt = np.sort(th % (2.0 * math.pi))
+        gaps = np.diff(np.r_[srt, srt[0] + 2.0 * math.pi])
+        return float(k_s * alpha**2 / 4.0 * (gaps**2).sum())
+
+    pos = alpha * np.column_stack([np.cos(theta), np.sin(theta)])
+    f = ring_spacing(pos, np.zeros(2), stiffness_n_m=k_s)
+    along = f[:, 0] * -np.sin(theta) + f[:, 1] * np.cos(theta)
+    h = 1e-6
+    for k in range(7):
+        up, down = theta.copy(), theta.copy()
+        up[k] += h
+        down[k] -= h
+        grad = (energy(up) - energy(down)) / (2.0 * h) / alpha
+        # quadratic energy: central differences are exact up to rounding (1e-9 / 1e-6)
+        assert along[k] == pytest.approx(-grad, abs=1e-7)
+
+
+def _jacobian(
+    fun: Callable[[FloatArray], FloatArray], pos: FloatArray, h: float = 1e-7
+) -> FloatArray:
+    n = pos.size
+    jac = np.empty((n, n))
+    for j in range(n):
+        up, down = pos.copy().reshape(-1), pos.copy().reshape(-1)
+        up[j] += h
+        down[j] -= h
+        diff = fun(up.reshape(pos.shape)) - fun(down.reshape(pos.shape))
+        jac[:, j] = diff.reshape(-1) / (2 * h)
+    return jac
+
+
+@pytest.mark.parametrize("law", ["deliverable", "regular"])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_stiffness_bound_bounds_the_jacobian(law: str, seed: int) -> None:
+    # 12 robots within 3 m of a 2 m circle, some pairs within contact range, one obstacle
+    rng = np.random.default_rng(seed)
+    pos = rng.uniform(-3.0, 3.0, (12, 2))
+    pos[1] = pos[0] + [0.42, 0.05]  # bodies 0.12 m apart: contact force and Coulomb act
+    obstacles = (np.array([[0.0, 3.5]]), np.array([0.4]))
+    params = FormationParams(alpha_m=2.0, attraction_limit_n=math.inf)
+    c = np.array([0.1, 0.0])
+
+    def force(p: FloatArray) -> FloatArray:
+        return formation_force(p, c, params, law=law, obstacles=obstacles)  # type: ignore[arg-type]
+
+    jac = _jacobian(force, pos)
+    rho = float(np.abs(np.linalg.eigvals(jac)).max())
+    bound = stiffness_bound(pos, c, params, law=law, obstacles=obstacles)  # type: ignore[arg-type]
+    # the bound holds (finite differences ~1e-6 relative) and is not vacuous (Gershgorin
+    # on symmetric pair terms: within a factor ~10 here)
+    assert rho <= bound * (1 + 1e-6)
+    assert bound < 20.0 * rho
+    f, b2 = formation_force_and_stiffness(pos, c, params, law=law, obstacles=obstacles)  # type: ignore[arg-type]
+    np.testing.assert_array_equal(f, force(pos))
+    assert b2 == bound
 
 
 @pytest.mark.parametrize("n", [3, 4, 5])

@@ -76,3 +76,21 @@ def test_compiled_evaluation_equals_the_reference_engine() -> None:
 def test_a_system_with_other_variables_is_rejected() -> None:
     with pytest.raises(InputError, match="needs inputs D_rp, x_err, alpha"):
         PathFollowingController(main=CTL.correction, correction=CTL.correction)
+
+
+def test_arrival_once_the_last_point_is_out_and_the_robot_is_past_the_end() -> None:
+    from firefleet.control.path_following import arrival
+
+    # path end at (5, 0) heading +x; a second one at (0, 3) heading +y
+    end = np.array([[5.0, 0.0, 0.0], [0.0, 3.0, math.pi / 2]])
+    before = np.zeros(2, dtype=bool)
+    past = np.array([[5.01, 1.0, 0.0], [2.0, 3.0, 0.0]])  # robot 2 exactly on the end line
+    np.testing.assert_array_equal(arrival(before, past, end, 50, 50), [True, True])
+    # not yet released: nobody arrives, however far
+    np.testing.assert_array_equal(arrival(before, past, end, 49, 50), [False, False])
+    short = np.array([[4.99, 0.0, 0.0], [0.0, 2.9, 0.0]])
+    np.testing.assert_array_equal(arrival(before, short, end, 60, 50), [False, False])
+    # once arrived, a robot stays arrived
+    np.testing.assert_array_equal(
+        arrival(np.array([True, False]), short, end, 60, 50), [True, False]
+    )

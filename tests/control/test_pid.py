@@ -6,9 +6,11 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.typing import NDArray
 
-from firefleet.control.pid import PidParams, PidState, pid_init, pid_step
+from firefleet.control.pid import PidParams, PidState, pid_init, pid_step, pid_step_one
 from firefleet.errors import InputError
 from firefleet.models.encoder import EncoderParams, encoder_init, encoder_step
 from firefleet.models.motor import MotorParams, discretise_motor, motor_step
@@ -199,3 +201,48 @@ def test_closed_loop_meets_the_deliverable_bounds(phase_counts: float) -> None:
 def test_bad_params_raise_input_error(field: str, value: float) -> None:
     with pytest.raises(InputError, match=field):
         PidParams(**{field: value})
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.tuples(*[st.floats(-30.0, 30.0)] * 5),
+    st.floats(0.0, 10.0),
+    st.floats(0.0, 50.0),
+    st.floats(0.0, 0.05),
+    st.floats(1e-3, 0.1),
+    st.floats(0.0, 1.0),
+    st.floats(1e-2, 1.0),
+    st.floats(0.5, 24.0),
+    st.sampled_from([0.001, 0.01, 0.02]),
+)
+def test_compiled_pid_step_equals_numpy_bit_for_bit(
+    values: tuple[float, float, float, float, float],
+    kp: float,
+    ki: float,
+    kd: float,
+    tf: float,
+    b: float,
+    tt: float,
+    lim: float,
+    dt: float,
+) -> None:
+    # the same operations in the same order (the clip as two comparisons), saturated or
+    # not (|u| up to some 300 V against limits of 0.5-24 V): identical doubles
+    integral, derivative, last, r, y = values
+    params = PidParams(
+        kp=kp,
+        ki=ki,
+        kd=kd,
+        derivative_filter_s=tf,
+        setpoint_weight=b,
+        tracking_time_s=tt,
+        output_limit=lim,
+    )
+    state = PidState(
+        integral=np.array(integral),
+        derivative=np.array(derivative),
+        last_measurement=np.array(last),
+    )
+    ref_state, ref_u = pid_step(state, r, y, params, dt)
+    got = pid_step_one(integral, derivative, last, r, y, params.gains, dt)
+    assert got == (float(ref_state.integral), float(ref_state.derivative), float(ref_u))

@@ -14,18 +14,18 @@ from firefleet.estimation.alignment import absolute_trajectory_error
 from firefleet.estimation.fastslam import (
     FastSlamParams,
     fastslam_init,
+    fastslam_memory_bytes,
     fastslam_step,
     run_fastslam,
+    slam_claims,
     slam_summary,
 )
-from firefleet.estimation.logs import SlamLog, gtsam_text, read_log
+from firefleet.estimation.logs import SlamLog, gtsam_text, parse_log, read_log
 from firefleet.estimation.particle_filter import compose, relative_pose
 from firefleet.sim.world import DriveResult
 
 VP = Path(__file__).resolve().parents[1] / "data" / "victoria_park_first1500.txt"
-VICTORIA_PARK = FastSlamParams(
-    version=2, odometry_noise_scale=2.0, heading_drift_sigma=0.003, turn_scale_sigma=0.05
-)
+VICTORIA_PARK = FastSlamParams(version=2)  # the defaults: calibration on, sigmas x 2
 
 
 def figure_eight_log(k_d: float, k_b: float, rng: np.random.Generator, *, laps: int = 2) -> SlamLog:
@@ -83,7 +83,9 @@ def test_known_association_beats_dead_reckoning(drive: DriveResult, version: Lit
     # the bounds: at most 0.5 m and at most half of odometry-only dead reckoning
     assert doc["position_rms_m"] <= min(0.5, doc["odometry_position_rms_m"] / 2)
     assert doc["landmark_rms_m"] <= min(0.5, doc["odometry_landmark_rms_m"] / 2)
-    assert all(c["passed"] for c in doc["claims"])
+    claims = slam_claims(doc, association="known")
+    assert [c.metric for c in claims] == ["position_rms_m", "landmark_rms_m"]
+    assert all(c.holds(doc[c.metric]) for c in claims)
 
 
 def test_fastslam_near_gtsams_optimum_of_the_simulated_log(
@@ -108,9 +110,16 @@ def test_fastslam_near_gtsams_optimum_of_the_simulated_log(
     assert log.truth_pose is not None
     rms_opt = float(np.sqrt(np.mean(np.sum((opt - log.truth_pose[:, :2]) ** 2, axis=1))))
     assert rms_opt < 0.1  # 0.055 m: the batch optimum of the same log
-    res = run_fastslam(log, np.random.default_rng(0), params=FastSlamParams(version=2))
-    # seed 0: 0.11 m, twice the batch optimum (seeds 0-2: 0.11-0.22 m)
-    assert slam_summary(log, res)["position_rms_m"] <= 3.0 * rms_opt
+    rms = [
+        slam_summary(
+            log, run_fastslam(log, np.random.default_rng(s), params=FastSlamParams(version=2))
+        )["position_rms_m"]
+        for s in range(3)
+    ]
+    # the defaults (odometry calibration on, sigmas x 2), seeds 0-2: 0.389, 0.125, 0.079 m;
+    # a single run varies by a factor of 5 (without calibration, sigmas x 1: 0.085, 0.336,
+    # 0.286 m), so the median of three is held to three times the batch optimum
+    assert float(np.median(rms)) <= 3.0 * rms_opt
 
 
 def test_unknown_association_leaves_no_duplicates(drive: DriveResult) -> None:
@@ -184,18 +193,21 @@ def test_victoria_park_subset_against_gtsam() -> None:
 def test_calibration_follows_a_systematic_heading_error(seed: int) -> None:
     # 0.002 rad/m of drift and turns 3 % short: dead reckoning ends 8-10 m off
     log = figure_eight_log(0.002, 0.03, np.random.default_rng(seed))
-    plain = run_fastslam(log, np.random.default_rng(seed), params=FastSlamParams(version=2))
+    uncalibrated = FastSlamParams(
+        version=2, odometry_noise_scale=1.0, heading_drift_sigma=0.0, turn_scale_sigma=0.0
+    )
+    plain = run_fastslam(log, np.random.default_rng(seed), params=uncalibrated)
     cal = run_fastslam(
         log,
         np.random.default_rng(seed),
-        params=FastSlamParams(version=2, heading_drift_sigma=0.003, turn_scale_sigma=0.05),
+        params=FastSlamParams(version=2, odometry_noise_scale=1.0),  # calibration on
     )
     rms_plain = slam_summary(log, plain)["position_rms_m"]
     doc = slam_summary(log, cal)
     # seeds 0-4: 0.77-1.45 m without calibration, 0.07-0.48 m with it
     assert doc["position_rms_m"] <= rms_plain / 2
     assert cal.calibration is not None
-    k_d, k_b = doc["odometry_calibration"].values()
+    k_d, k_b = doc["heading_drift_rad_per_m"], doc["turn_scale_error"]
     # on the left-hand circle (the first the filter sees) the heading gains
     # k_d + k_b / R = 0.002 + 0.03 / 10 = 0.005 rad/m; seeds 0-4 found 0.0045-0.0056
     assert k_d + k_b / 10.0 == pytest.approx(0.005, abs=0.001)
@@ -262,3 +274,49 @@ def test_bad_params() -> None:
         FastSlamParams(heading_drift_sigma=-0.1)
     with pytest.raises(InputError, match="calibration"):
         fastslam_init(4, landmark_ids=np.arange(2), calibration=np.zeros((3, 2)))
+
+
+def test_slam_claims_are_scenario_claims() -> None:
+    # the bounds: 0.5 m, or half of odometry alone when that is smaller
+    doc = {
+        "position_rms_m": 0.6,
+        "odometry_position_rms_m": 4.0,
+        "landmark_rms_m": 0.06,
+        "odometry_landmark_rms_m": 0.1,
+        "duplicate_landmarks": 1,
+    }
+    claims = {c.metric: c for c in slam_claims(doc, association="unknown")}
+    assert claims["position_rms_m"].value == 0.5
+    assert not claims["position_rms_m"].holds(0.6)
+    assert claims["landmark_rms_m"].value == pytest.approx(0.05)
+    assert not claims["landmark_rms_m"].holds(0.06)
+    assert claims["landmark_rms_m"].holds(0.05)
+    assert not claims["duplicate_landmarks"].holds(1)
+    assert claims["duplicate_landmarks"].holds(0)
+    assert "duplicate_landmarks" not in {c.metric for c in slam_claims(doc, association="known")}
+    assert slam_claims({"poses": 10}, association="known") == ()  # no ground truth
+
+
+def test_log_without_observations_is_an_input_error() -> None:
+    # before: IndexError inside run_fastslam
+    odometry = [f"ODOMETRY {k} {k + 1} 1 0 0.01 1e-4 0 0 1e-4 0 1e-6" for k in range(5)]
+    log = parse_log(odometry, name="odo.txt")
+    with pytest.raises(InputError, match=r"^odo\.txt: no LANDMARK or BR lines"):
+        run_fastslam(log, np.random.default_rng(0))
+    unknown_ids = parse_log([*odometry, "BR 2 -1 0.1 5 0.01 0.1"], name="odo.txt")
+    with pytest.raises(InputError, match="every id is -1"):
+        run_fastslam(unknown_ids, np.random.default_rng(0))
+    res = run_fastslam(
+        unknown_ids, np.random.default_rng(0), params=FastSlamParams(association="unknown")
+    )
+    assert res.trajectory.shape == (6, 3)
+
+
+def test_memory_estimate_counts_paths_and_maps() -> None:
+    log = read_log(VP)  # 929 poses, 52 landmarks
+    prm = FastSlamParams(n_particles=1000)
+    with_path = fastslam_memory_bytes(log, prm)
+    assert with_path == 1000 * (52 * 114 + 200 + 32 * 929)
+    assert fastslam_memory_bytes(log, prm, keep_path=False) == 1000 * (52 * 114 + 200)
+    # ten million particles on the whole of Victoria Park: terabytes, refused by the CLI
+    assert fastslam_memory_bytes(log, FastSlamParams(n_particles=10**7)) > 3e11

@@ -8,8 +8,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from firefleet.errors import InputError
+from firefleet.estimation.fastslam import FastSlamParams, run_fastslam
 from firefleet.estimation.logs import format_log, parse_log, read_log
 from firefleet.sim.world import DriveResult
 
@@ -63,7 +66,15 @@ GOOD = ["ODOMETRY 0 1 1 0 0 0.01 0 0 0.01 0 0.01", "BR 1 7 0.5 3.0 0.01 0.1"]
         ("LANDMARK 1.5 3 1 1 0.4 0 0.4", "ids must be integers"),
         ("BR 1 3 0.1 -2 0.01 0.1", "must be > 0"),
         ("VERTEX 1 0 0 0", "unknown record 'VERTEX'"),
-        ("ODOMETRY 1 2 1 0 0 -1 0 0 0.01 0 0.01", "not positive semi-definite"),
+        ("ODOMETRY 1 2 1 0 0 -1 0 0 0.01 0 0.01", "variance c11 (field 6) must be >= 0, got -1"),
+        ("ODOMETRY 1 2 1 0 0 0.01 0 0 0.01 0 -1e-4", "variance c33 (field 11) must be >= 0"),
+        ("ODOMETRY 1 2 1 0 0 0.01 0.5 0 0.01 0 0.01", "not positive semi-definite"),
+        # a negative or zero variance of an observation was accepted before
+        ("LANDMARK 1 3 1 1 -0.4 0 0.4", "LANDMARK variance c11 (field 5) must be > 0, got -0.4"),
+        ("LANDMARK 1 3 1 1 0.4 0 0", "LANDMARK variance c22 (field 7) must be > 0, got 0"),
+        ("LANDMARK 1 3 1 1 0.4 0.5 0.4", "not positive definite: c12 = 0.5"),
+        # found by the mutation test below: the filter's path was NaN, exit 0
+        ("ODOMETRY 1 2 1 0 0 1e308 0 0 0.01 0 0.01", "field 6 is 1e308: beyond 1e+12"),
     ],
 )
 def test_malformed_line_is_named_with_its_number(bad: str, message: str) -> None:
@@ -83,3 +94,50 @@ def test_empty_missing_and_binary_files(tmp_path: Path) -> None:
         read_log(tmp_path / "bin")
     with pytest.raises(InputError, match="observation from pose 9, not in the chain"):
         parse_log([GOOD[0], "BR 9 7 0.5 3.0 0.01 0.1"])
+
+
+_SAMPLE = VP.read_text().splitlines()[:60]
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    edits=st.lists(
+        st.tuples(
+            st.integers(0, len(_SAMPLE) - 1),
+            st.integers(0, 11),
+            st.sampled_from(["-1", "0", "nan", "1e308", "-0.5", "x", "", "3.5", "7", "-7"]),
+        ),
+        min_size=1,
+        max_size=4,
+    )
+)
+def test_mutated_logs_parse_or_raise_input_error(edits: list[tuple[int, int, str]]) -> None:
+    # a valid log with fields replaced or dropped: read and filtered, or one InputError
+    # naming the line (never another exception from the reader or the filter)
+    lines = list(_SAMPLE)
+    for row, col, value in edits:
+        words = lines[row].split()
+        if col < len(words):
+            words[col] = value
+        lines[row] = " ".join(w for w in words if w)
+    message = ""
+    try:
+        log = parse_log(lines, name="m.log")
+        res = run_fastslam(log, np.random.default_rng(0), params=FastSlamParams(n_particles=5))
+    except InputError as exc:
+        message = str(exc)
+    if message:
+        assert message.startswith("m.log")
+    else:
+        assert np.all(np.isfinite(res.trajectory))
+
+
+@settings(max_examples=100, deadline=None)
+@given(text=st.text(max_size=300))
+def test_random_text_parses_or_raises_input_error(text: str) -> None:
+    message = "r.log"
+    try:
+        parse_log(text.splitlines(), name="r.log")
+    except InputError as exc:
+        message = str(exc)
+    assert message.startswith("r.log")

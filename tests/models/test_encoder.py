@@ -6,9 +6,11 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from firefleet.errors import InputError
-from firefleet.models.encoder import EncoderParams, encoder_init, encoder_step
+from firefleet.models.encoder import EncoderParams, encoder_init, encoder_step, encoder_step_one
 
 
 def test_counts_are_floor_of_angle_times_cpr_over_2pi() -> None:
@@ -139,3 +141,32 @@ def test_encoder_at_rest_measures_zero() -> None:
 def test_invalid_params_raise_input_error(field: str, kwargs: dict[str, int]) -> None:
     with pytest.raises(InputError, match=field):
         EncoderParams(**kwargs)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.sampled_from([0, 1, 360, 2048, 100_000]),
+    st.integers(1, 4),
+    st.sampled_from([0.001, 0.01, 0.05]),
+    st.floats(-1e3, 1e3, allow_nan=False),
+    st.lists(st.floats(-0.5, 0.5, allow_nan=False), min_size=1, max_size=12),
+)
+def test_compiled_encoder_step_equals_numpy_bit_for_bit(
+    cpr: int, window: int, dt: float, start: float, turns: list[float]
+) -> None:
+    # the caller of encoder_step_one keeps the history (here a list, oldest first); the
+    # counts, angles and speeds are the same doubles as encoder_step's
+    params = EncoderParams(counts_per_rev=cpr, window_steps=window)
+    state = encoder_init(np.array([start]), params)
+    history = [float(h) for h in state.history[:, 0]]
+    angle = start
+    per_rad, per_count = params.counts_per_rad, params.speed_per_count(dt)
+    for dphi in turns:
+        state, counts, speed = encoder_step(state, np.array([dphi]), params, dt)
+        angle, count, measured = encoder_step_one(angle, dphi, history[1], per_rad, per_count)
+        history = [*history[1:], count]
+        assert (angle, count, measured) == (
+            float(state.angle_rad[0]),
+            float(counts[0]),
+            float(speed[0]),
+        )

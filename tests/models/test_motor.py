@@ -7,11 +7,13 @@ import math
 import control
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
 from firefleet.errors import InputError
-from firefleet.models.motor import MotorParams, discretise_motor, motor_step
+from firefleet.models.motor import MotorParams, discretise_motor, motor_step, motor_step_one
 
 # Table 2 of the deliverable, written out here so the test does not trust the defaults
 R_OHM, L_H, J_KG_M2, B_NMS, KE, KT = 3.07, 0.04, 0.0294, 0.0141, 0.65, 0.65
@@ -263,3 +265,24 @@ def test_zero_damping_is_allowed() -> None:
 def test_bad_step_raises_input_error(dt: float) -> None:
     with pytest.raises(InputError, match="dt_s"):
         discretise_motor(TABLE2, dt)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.floats(-20.0, 20.0),
+    st.floats(-50.0, 50.0),
+    st.floats(-12.0, 12.0),
+    st.floats(-1.0, 1.0),
+    st.sampled_from([0.001, 0.01, 0.05]),
+    st.floats(0.5, 2.0),
+)
+def test_compiled_motor_step_equals_numpy_bit_for_bit(
+    current: float, speed: float, volts: float, load: float, dt: float, scale: float
+) -> None:
+    # the same four products summed in the same order: identical doubles
+    motor = discretise_motor(
+        MotorParams(resistance_ohm=R_OHM * scale, inertia_kg_m2=J_KG_M2 / scale), dt
+    )
+    got = motor_step_one(current, speed, volts, load, motor.coefficients)
+    ref = motor_step(current, speed, volts, load, motor)
+    assert got == tuple(float(v) for v in ref)

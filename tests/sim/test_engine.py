@@ -27,8 +27,8 @@ def test_seed_changes_the_encoder_phase() -> None:
     assert not np.array_equal(a.wheel_speed_measured_rad_s, b.wheel_speed_measured_rad_s)
 
 
-@pytest.mark.parametrize("backend", ["array", "scalar"])
-def test_team_run_equals_single_robot_runs(backend: Literal["array", "scalar"]) -> None:
+@pytest.mark.parametrize("backend", ["auto", "array"])
+def test_team_run_equals_single_robot_runs(backend: Literal["auto", "array"]) -> None:
     # With an ideal encoder the run has no randomness, so a team of three must equal
     # three single-robot runs, robot by robot (batch-first arrays, no per-robot state mixing).
     base = dataclasses.replace(
@@ -108,34 +108,3 @@ def test_open_loop_steady_speed_is_the_analytic_value() -> None:
     assert m["steady_current_a"] == pytest.approx(
         p.damping_n_m_s * analytic / p.torque_n_m_a, rel=1e-9
     )
-
-
-MOTOR_SCENARIOS = [
-    n
-    for n in builtin_names()
-    if load_scenario(n).command.kind in ("voltage-step", "wheel-speed-step")
-]
-
-
-@pytest.mark.parametrize("name", MOTOR_SCENARIOS)
-@pytest.mark.parametrize("n_robots", [1, 3])
-@pytest.mark.parametrize("counts_per_rev", [0, 2048])
-def test_scalar_and_array_backends_agree(name: str, n_robots: int, counts_per_rev: int) -> None:
-    # The scalar backend mirrors the array one operation for operation: the wheel arrays
-    # (pure IEEE arithmetic) must be identical; poses go through sin/cos, whose NumPy and
-    # libm implementations may differ in the last bit, so 1e-12 m / rad there.
-    scn = load_scenario(name)
-    poses = ((0.0, 0.0, 0.0), (1.0, 2.0, 30.0), (3.0, -1.0, -170.0))[:n_robots]
-    scn = dataclasses.replace(
-        scn, poses=poses, encoder=dataclasses.replace(scn.encoder, counts_per_rev=counts_per_rev)
-    )
-    a = simulate(scn, seed=3, backend="array").arrays()
-    b = simulate(scn, seed=3, backend="scalar").arrays()
-    for key, arr in a.items():
-        if key == "pose":
-            np.testing.assert_allclose(b[key], arr, rtol=0, atol=1e-12)
-        else:
-            np.testing.assert_array_equal(b[key], arr, err_msg=key)
-    # in closed loop the two wheels really differ (random encoder phases): the robots turn
-    if counts_per_rev and scn.command.kind == "wheel-speed-step":
-        assert np.ptp(a["pose"][:, 0, 2]) > 0

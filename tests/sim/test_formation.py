@@ -14,12 +14,17 @@ from scipy.optimize import brentq
 
 from firefleet import compute_metrics, load_scenario, simulate
 from firefleet.cli import main
+from firefleet.errors import InputError
+from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
 from firefleet.scenarios.schema import Formation, LeaderPath, Scenario, parse_scenario
+from firefleet.sim import formation as formation_module
 from firefleet.sim.formation import (
+    FormationDivergedError,
     formation_metrics,
     leader_trajectory,
     spacing_error_deg,
     start_positions,
+    substeps,
 )
 from firefleet.sim.result import SimResult
 
@@ -97,7 +102,7 @@ def test_metrics_on_a_hand_built_run() -> None:
         voltage_v=empty,
         load_torque_n_m=empty,
         extra={
-            "leader_xy": np.zeros((2, 2)),
+            "leader_xy_m": np.zeros((2, 2)),
             "formation_xy_m": pts,
             "robot_active": np.ones((2, 3)),
         },
@@ -165,7 +170,7 @@ def test_point_masses_keep_the_circle_while_the_leader_moves() -> None:
         _scenario(law="regular", alpha_m=3.0, leader=leader), poses=poses, duration_s=25.0
     )
     r = simulate(scn)
-    lead = r.extra["leader_xy"]
+    lead = r.extra["leader_xy_m"]
     np.testing.assert_allclose(lead[-1], [3.0, 3.0], atol=1e-12)
     dist = np.sqrt(((r.pose[:, :, :2] - lead[:, None, :]) ** 2).sum(axis=2))
     # the feedforward is held over each 10 ms step while the leader's velocity changes
@@ -214,7 +219,7 @@ def test_run_writes_leader_and_claims(tmp_path: Path) -> None:
     assert main(["run", "formation-failure", "--out", str(out)]) == 0
     with np.load(out / "result.npz") as npz:
         t = npz["t"]
-        assert npz["leader_xy"].shape == (t.size, 2)
+        assert npz["leader_xy_m"].shape == (t.size, 2)
         assert npz["pose"].shape == (t.size, 5, 3)
         assert "current_a" not in npz  # point masses have no wheels
     assert not (out / "formation.gif").exists()  # the leader stays: no animation
@@ -259,6 +264,14 @@ command: {kind: formation, %s}
         ("obstacles: [{x_m: 0, y_m: 0, radius_m: 0}]", "radius_m must be > 0"),
         ("leader: {waypoints_m: []}", "waypoints_m must list at least one point"),
         ("scatter_m: 0.1", "cannot place 2 robots"),
+        (
+            "alpha_m: 0.1",
+            "alpha_m = 0.1 m is too small for 2 robots of radius 0.15 m (robot_radius_m)",
+        ),
+        (
+            "alpha_m: 2000.0, attraction_limit_n: null, scatter_m: 5.0",
+            "N/m: a 0.01 s step would need more than 10,000 sub-steps to stay stable",
+        ),
     ],
 )
 def test_bad_formation_input_is_one_line_exit_2(
@@ -272,4 +285,146 @@ def test_bad_formation_input_is_one_line_exit_2(
     assert fragment in err, err
     assert len(err.strip().splitlines()) == 1
     assert "Traceback" not in err
+    assert not out.exists()
+
+
+def _team(
+    n: int, alpha_m: float, law: str = "regular", duration_s: float = 30.0, **command: Any
+) -> Scenario:
+    """N robots from seeded random starts onto a circle of alpha_m (the bench's recipe)."""
+    cmd: dict[str, Any] = {
+        "kind": "formation",
+        "law": law,
+        "alpha_m": alpha_m,
+        "attraction_gain": 9.0 / alpha_m**2,  # 18 N/m on the circle at any radius
+        "scatter_m": max(5.0, alpha_m / 2.0),
+        **command,
+    }
+    return parse_scenario(
+        {
+            "name": "team",
+            "title": "t",
+            "duration_s": duration_s,
+            "seed": 1,
+            "poses": [[0.0, 0.0, 0.0]] * n,
+            "command": cmd,
+        }
+    )
+
+
+def test_held_force_step_is_stable_with_the_substeps() -> None:
+    # eq. 5 with a spring -kappa x: one held-force step is linear in (x, v); its 2 x 2
+    # matrix, made by stepping unit states, must have spectral radius < 1
+    md = MassDamperParams()  # M = 1 kg, c = 2 N s/m: the bound is ~2 c / h = 400 N/m
+    dt = 0.01
+
+    def radius(kappa: float, n_sub: int) -> float:
+        cols = []
+        for unit in ([1.0, 0.0], [0.0, 1.0]):
+            s = np.array([[unit[0], 0.0, unit[1], 0.0]])
+            for _ in range(n_sub):
+                s = mass_damper_step(s, -kappa * s[:, :2], dt / n_sub, md)
+            cols.append([s[0, 0], s[0, 2]])
+        return float(np.abs(np.linalg.eigvals(np.array(cols).T)).max())
+
+    assert radius(380.0, 1) < 1.0 < radius(420.0, 1)  # the ~400 N/m edge is real
+    for kappa in (10.0, 200.0, 420.0, 5e3, 1e5, 1e6):
+        n = substeps(kappa, 2.0, dt)
+        assert radius(kappa, n) < 1.0, (kappa, n)
+    assert [substeps(k, 2.0, dt) for k in (0.0, 200.0, 200.1, 1e3)] == [1, 1, 2, 5]
+    with pytest.raises(FormationDivergedError, match="more than 10,000 sub-steps"):
+        substeps(math.nan, 2.0, dt)
+
+
+@pytest.mark.parametrize(("n", "alpha_m"), [(3, 3.0), (20, 3.0), (200, 30.0)])
+def test_regular_law_converges_for_teams(n: int, alpha_m: float) -> None:
+    scn = _team(n, alpha_m, formed_by_s=25.0)
+    m = compute_metrics(simulate(scn))
+    # issue 13: radius error <= 1 % of alpha, spacing error <= 2 deg, no contact
+    assert float(m["radius_error_max_m"]) <= 0.01 * alpha_m  # type: ignore[arg-type]
+    assert float(m["spacing_error_max_deg"]) <= 2.0  # type: ignore[arg-type]
+    assert float(m["min_clearance_m"]) > 0.0  # type: ignore[arg-type]
+
+
+def test_issue_13_team_with_the_readme_keys_converges() -> None:
+    # 100 robots on a 10 m circle with the README's keys (eq. 6 with a = 1, now capped
+    # at 10 N by default; scatter 10 m): diverged to ~250 km before issue 13
+    scn = parse_scenario(
+        {
+            "name": "readme",
+            "title": "t",
+            "duration_s": 30.0,
+            "seed": 0,
+            "poses": [[0.0, 0.0, 0.0]] * 100,
+            "command": {
+                "kind": "formation",
+                "law": "regular",
+                "alpha_m": 10.0,
+                "scatter_m": 10.0,
+                "formed_by_s": 25.0,
+            },
+        }
+    )
+    m = compute_metrics(simulate(scn))
+    assert float(m["radius_error_max_m"]) <= 0.01 * 10.0  # type: ignore[arg-type]
+    assert float(m["spacing_error_max_deg"]) <= 2.0  # type: ignore[arg-type]
+    assert float(m["min_clearance_m"]) > 0.0  # type: ignore[arg-type]
+
+
+def test_regular_law_converges_for_1000_robots() -> None:
+    # 1,000 robots from a 80 m square onto a 150 m circle (side 0.94 m): formed by 35 s
+    scn = _team(1000, 150.0, duration_s=40.0, scatter_m=40.0, formed_by_s=35.0)
+    r = simulate(scn, record_every=100)
+    m = compute_metrics(r)
+    assert float(m["radius_error_max_m"]) <= 0.01 * 150.0  # type: ignore[arg-type]
+    assert float(m["spacing_error_max_deg"]) <= 2.0  # type: ignore[arg-type]
+    # (min_clearance_m sees the recorded samples only, here every second)
+    assert float(m["min_clearance_m"]) > 0.0  # type: ignore[arg-type]
+    # the steps were stable, mostly undivided
+    assert float(np.mean(r.extra["substeps"])) < 1.5
+
+
+def test_deliverable_law_at_team_scale_is_bounded_and_on_the_circle() -> None:
+    # 100 robots on a 10 m circle, k_r scaled with the polygon's side squared
+    # (0.63 m against the 5-gon's 3.53 m on 3 m): every robot on the circle
+    side = 2.0 * 10.0 * math.sin(math.pi / 100)
+    scn = _team(100, 10.0, law="deliverable", k_r=10.0 * (side / 3.53) ** 2, formed_by_s=25.0)
+    m = compute_metrics(simulate(scn))
+    assert float(m["radius_error_max_m"]) <= 0.05 * 10.0  # type: ignore[arg-type]
+    # with the deliverable's k_r = 10 the crowded ring walls late robots out (the
+    # irregular polygon, with robots off it), but the run stays bounded
+    scn10 = _team(20, 3.0, law="deliverable", formed_by_s=25.0)
+    final = compute_metrics(simulate(scn10))["final_radius_m"]
+    assert max(final) < 2.0 * 3.0  # type: ignore[arg-type]
+
+
+def test_team_that_cannot_fit_is_a_validation_error() -> None:
+    # 100 bodies of 0.15 m need 0.15 / sin(pi / 100) = 4.775 m
+    with pytest.raises(InputError) as info:
+        _team(100, 4.7)
+    msg = str(info.value)
+    assert "alpha_m = 4.7 m is too small for 100 robots of radius 0.15 m" in msg
+    assert "at least 4.775 m" in msg
+    _team(100, 4.78)  # fits
+    with pytest.raises(InputError, match=r"radius 0.25 m \(robot_radius_m \+ look_ahead_m\)"):
+        _team(100, 6.0, robot_model="diff-drive")
+
+
+def test_a_run_that_leaves_every_bound_stops_with_an_error(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the position guard: robots farther than DIVERGENCE_FACTOR x the formation's size
+    monkeypatch.setattr(formation_module, "DIVERGENCE_FACTOR", 0.1)
+    with pytest.raises(FormationDivergedError, match=r"diverged at t = 0.000 s: a robot is"):
+        simulate(_scenario(scatter_m=5.0))
+
+
+def test_diverging_run_writes_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "stiff.yaml"
+    path.write_text(BAD % "alpha_m: 2000.0, attraction_limit_n: null, scatter_m: 5.0")
+    out = tmp_path / "o"
+    assert main(["run", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "stiffness" in err
+    assert len(err.strip().splitlines()) == 1
     assert not out.exists()

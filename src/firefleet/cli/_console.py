@@ -23,6 +23,7 @@ __all__ = [
     "all_passed",
     "check_flag",
     "claims_table",
+    "metrics_table",
     "progress_bar",
     "shown",
 ]
@@ -121,6 +122,12 @@ def claims_table(
             measured = value[k - 1] if k <= len(value) else None
             table.add_row(escape(f"  [robot {k}]"), shown(measured), *_verdicts(here))
     return table
+
+
+def metrics_table(document: dict[str, Any]) -> Table:
+    """The claims table of a ``metrics.json`` document."""
+    values = [(k, v) for k, v in document.items() if k not in ("scenario", "claims")]
+    return claims_table(f"{document['scenario']}: metrics and claims", values, document["claims"])
 
 
 ROBOT_ROWS = 5

@@ -11,7 +11,7 @@
     firefleet fis FILE [--out DIR] [--fix NAME=VALUE ...]
     firefleet fis FILE --eval IN.csv --out OUT.csv
     firefleet thermal FRAME... [--out DIR] [--counts CAL] [--hfov-deg DEG] [--fire-width-m W]
-    firefleet slam LOG [--particles P] [--seed N] [--out DIR] [--version {1,2}]
+    firefleet slam LOG [--particles P] [--seed N] [--out DIR] [--fastslam {1,2}]
                    [--association {known,unknown}] [--odometry-noise-scale S]
                    [--heading-drift-sigma RAD_PER_M] [--turn-scale-sigma S] [--no-plots]
 
@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from rich.console import Console
 
@@ -36,8 +37,18 @@ from firefleet.errors import InputError
 __all__ = ["main"]
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, with a bad command line as one line on stderr (no usage block)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(
+            EXIT_BAD_INPUT,
+            f"{self.prog}: error: {message} (see {self.prog} --help)\n",
+        )
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="firefleet",
         description="Teams of intelligent mobile robots for firefighting: simulate, "
         "check, and reproduce the deliverable's experiments.",

@@ -10,7 +10,6 @@ from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
 
 import firefleet
 from firefleet.cli._console import (
@@ -18,7 +17,7 @@ from firefleet.cli._console import (
     EXIT_CLAIM_FAILED,
     EXIT_OK,
     all_passed,
-    claims_table,
+    metrics_table,
     progress_bar,
 )
 from firefleet.errors import InputError
@@ -88,12 +87,6 @@ def run_into(
             (folder / name).write_bytes(data)
         names = tuple(pngs)
     return document, names
-
-
-def metrics_table(document: dict[str, Any]) -> Table:
-    """The claims table of a ``metrics.json`` document."""
-    values = [(k, v) for k, v in document.items() if k not in ("scenario", "claims")]
-    return claims_table(f"{document['scenario']}: metrics and claims", values, document["claims"])
 
 
 def cmd_list(args: argparse.Namespace, out: Console, err: Console) -> int:

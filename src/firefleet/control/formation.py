@@ -18,25 +18,46 @@ and its tangential part is weak near equilibrium, which is why the deliverable s
 
 ``"regular"`` (beyond the deliverable)::
 
-    f_k = attraction (eq. 6) + g_t (F_k . t_k) t_k + contact_k
+    f_k = attraction (eq. 6) + K_s r_k (g_k+ - g_k-) / 2 t_k + contact_k
 
-where ``F_k`` is the Coulomb force of eq. 8 and ``t_k`` the unit tangent of the circle
-about the leader at robot k. Keeping only the tangential part of the repulsion leaves
-the radial equilibrium exactly on the circle (|p_k - c| = alpha), and on the circle the
-tangential part is minus the gradient of the Coulomb energy ``sum k_r q q / r_ki`` with
-respect to the robot's arc position, whose minimum on a circle is the regular polygon
-(equal angular spacing; Thomson's problem in one dimension). ``g_t`` (``spacing_gain``)
-speeds the spacing up. Because the radial repulsion is gone, robots on the same ray
-would no longer repel: ``contact_k``, a short-range repulsion on the gap between the
-robots' bodies (Khatib's FIRAS potential, 1986), keeps them apart; it is zero once the
-gaps exceed ``contact_range_m``, so it leaves the polygon untouched.
+where ``g_k+`` and ``g_k-`` are the angles about the leader from robot k to the next
+robot counter-clockwise and from the previous one (its two *angular neighbours*),
+``r_k`` its distance from the leader, ``t_k`` the unit tangent of the circle through it
+and ``K_s`` the spacing stiffness [N/m]. On the circle this is minus the gradient of
+``K_s alpha^2 / 4 sum_k g_k^2`` with respect to the arc position, whose minimum under
+``sum g_k = 2 pi`` is the regular polygon (equal gaps), in the order the robots already
+have: the nearest-neighbour circle formation of Wang, Xie and Cao (2013). The radial
+equilibrium is exactly on the circle (nothing radial but the attraction). ``contact_k``,
+a short-range repulsion on the gap between the robots' bodies (Khatib's FIRAS potential,
+1986), keeps robots apart on their way to the circle; it is zero once the gaps exceed
+``contact_range_m``, so it leaves the polygon untouched when the polygon's side leaves
+that much room (the runner shortens the range for a crowded circle).
+
+Why not the tangential part of the Coulomb force (this law's first version): the
+force between neighbours a distance s apart has a stiffness ``2 k_r q^2 / s^3``; on
+a circle ``s = 2 pi alpha / N`` so, for a fixed radius, the stiffness grows as N^3
+(100 robots on a 10 m circle: some 400 N/m per robot, at the stability limit of a
+10 ms step, see :func:`stiffness_bound`), the far robots' pushes nearly cancel, so
+the spacing is slow where it is not unstable, and the sum costs O(N^2) per step. The
+angular-neighbour law has the stiffness ``2 K_s`` whatever N, costs one sort
+(O(N log N)) and converges for any team (its gaps diffuse: the largest gap error of
+a random start falls like ``1 / sqrt(t)`` at least, the slowest, longest, mode as
+``exp(-K_s (2 pi / N)^2 t / (2 (B + k_d)))``).
 
 Obstacles (circles) repel with the same FIRAS force on the gap between a robot's body
 and the obstacle (Rezaee and Abdollahi 2014 treat obstacles as repulsive too).
 
-The Coulomb sums are evaluated in row blocks of at most ``block_elems`` pairs, so the
-memory is O(N + block), not O(N^2): no N x N x k temporaries at any team size. The
-short-range contact pairs come from a k-d tree (O(N log N)).
+The Coulomb sums (the deliverable's law) are evaluated in row blocks of at most
+``block_elems`` pairs, so the memory is O(N + block), not O(N^2): no N x N x k
+temporaries at any team size. The short-range contact pairs come from a k-d tree
+(O(N log N)).
+
+Stiffness: :func:`stiffness_bound` bounds the largest eigenvalue of the force's
+Jacobian [N/m] (Gershgorin's theorem on the pairwise terms). A force held over a step
+``h`` on a point mass with damping ``c`` (eq. 5) is stable only below ``2 c / h`` (400
+N/m for the deliverable's c = 2 N s/m and 10 ms), and the Coulomb force (``2 k_r q^2 /
+r^3`` per pair) and the contact force (``~3 eta / g^4``) exceed it when two robots come
+close; the runner (:mod:`firefleet.sim.formation`) divides such steps.
 
 References
 ----------
@@ -44,6 +65,11 @@ H. Rezaee and F. Abdollahi, "A decentralized cooperative control scheme with obs
 avoidance for a team of mobile robots", IEEE Trans. Industrial Electronics 61(1), 2014.
 O. Khatib, "Real-time obstacle avoidance for manipulators and mobile robots",
 Int. J. Robotics Research 5(1), 1986 (the FIRAS potential).
+C. Wang, G. Xie and M. Cao, "Forming circle formations of anonymous mobile agents with
+order preservation", IEEE Trans. Automatic Control 58(12), 2013 (angular neighbours).
+R. Sepulchre, D. A. Paley and N. E. Leonard, "Stabilization of planar collective motion
+with limited communication", IEEE Trans. Automatic Control 53(3), 2008 (splay, i.e.
+evenly spaced, circular formations from local phase couplings).
 """
 
 from __future__ import annotations
@@ -62,10 +88,14 @@ __all__ = [
     "BLOCK_ELEMS",
     "FormationParams",
     "circle_attraction",
+    "contact_pairs",
     "contact_repulsion",
     "coulomb_repulsion",
     "formation_force",
+    "formation_force_and_stiffness",
     "obstacle_repulsion",
+    "ring_spacing",
+    "stiffness_bound",
     "tangential_part",
 ]
 
@@ -95,10 +125,13 @@ class FormationParams:
     attraction_gain : float
         Gain a of eq. 6 [N / m^3], > 0 (eq. 6 as printed: 1).
     attraction_limit_n : float
-        Largest magnitude of the attraction [N] (an actuator's limit; ``inf``: eq. 6 as
-        printed, which grows with the cube of the distance).
-    spacing_gain : float
-        g_t, gain on the tangential Coulomb force of the ``"regular"`` law, >= 0.
+        Largest magnitude of the attraction [N] (an actuator's limit, 10 N: 5 m/s at
+        the deliverable's damping; ``inf``: eq. 6 as printed, which grows with the cube
+        of the distance: 280 N at 7 m from a 3 m circle, enough to throw robots into
+        each other at 140 m/s, a stiffness no 10 ms step follows).
+    spacing_stiffness_n_m : float
+        K_s, stiffness of the ``"regular"`` law's angular-neighbour spacing [N/m], >= 0
+        (its fastest mode has the stiffness 2 K_s, whatever the team's size).
     robot_radius_m : float
         Radius of a robot's body [m], >= 0 (for contact and obstacle forces).
     contact_gain : float
@@ -111,8 +144,8 @@ class FormationParams:
     k_r: float = 10.0
     charge_c: float = 1.0
     attraction_gain: float = 1.0
-    attraction_limit_n: float = math.inf
-    spacing_gain: float = 1.0
+    attraction_limit_n: float = 10.0
+    spacing_stiffness_n_m: float = 20.0
     robot_radius_m: float = 0.15
     contact_gain: float = 0.05
     contact_range_m: float = 0.5
@@ -122,7 +155,13 @@ class FormationParams:
             self,
             "",
             positive=("alpha_m", "attraction_gain", "contact_range_m"),
-            non_negative=("k_r", "charge_c", "spacing_gain", "robot_radius_m", "contact_gain"),
+            non_negative=(
+                "k_r",
+                "charge_c",
+                "spacing_stiffness_n_m",
+                "robot_radius_m",
+                "contact_gain",
+            ),
         )
         if not self.attraction_limit_n > 0:  # inf allowed, NaN not
             raise InputError(f"attraction_limit_n must be > 0, got {self.attraction_limit_n}")
@@ -183,15 +222,20 @@ def _charges(charge: ArrayLike, n: int) -> FloatArray:
     return as_float_array(q, "charge", (n,))
 
 
-def _coulomb_sums(p: FloatArray, q: FloatArray, block_elems: int) -> FloatArray:
+def _coulomb_sums(
+    p: FloatArray, q: FloatArray, block_elems: int, stiffness: FloatArray | None = None
+) -> FloatArray:
     """``sum_i q_i (p_k - p_i) / r_ki^3`` for every k (eq. 8 without ``k_r q_k``).
 
     Rows are taken in blocks of ``block_elems // N`` robots; every temporary is
-    (rows, N), never (N, N, 2).
+    (rows, N), never (N, N, 2). If ``stiffness`` (N,) is given, ``sum_i q_i / r_ki^3``
+    is written into it (for :func:`stiffness_bound`).
     """
     n = p.shape[0]
     out = np.zeros((n, 2))
     if n < 2:
+        if stiffness is not None:
+            stiffness[:] = 0.0
         return out
     p = p - p.mean(axis=0)  # translation-invariant; keeps the numbers near 0
     x, y = p[:, 0], p[:, 1]
@@ -210,6 +254,8 @@ def _coulomb_sums(p: FloatArray, q: FloatArray, block_elems: int) -> FloatArray:
         np.divide(q, w, out=w)  # q_i / r^3
         out[a:b, 0] = np.einsum("ij,ij->i", w, dx)
         out[a:b, 1] = np.einsum("ij,ij->i", w, dy)
+        if stiffness is not None:
+            stiffness[a:b] = w.sum(axis=1)
     return out
 
 
@@ -287,22 +333,7 @@ def contact_repulsion(
     The pairs within reach come from a k-d tree (``scipy.spatial.cKDTree``), in
     O(N log N) time and O(pairs) memory.
     """
-    p = _positions(pos)
-    out = np.zeros_like(p)
-    if p.shape[0] < 2 or gain == 0:
-        return out
-    pairs = cKDTree(p).query_pairs(2.0 * radius_m + range_m, output_type="ndarray")
-    if pairs.shape[0] == 0:
-        return out
-    k, i = pairs[:, 0], pairs[:, 1]
-    d = p[k] - p[i]
-    r = np.sqrt((d * d).sum(axis=1))
-    keep = r > 0  # coincident bodies: no defined direction
-    k, i, d, r = k[keep], i[keep], d[keep], r[keep]
-    push = (_firas(r - 2.0 * radius_m, range_m, gain) / r)[:, None] * d
-    np.add.at(out, k, push)
-    np.add.at(out, i, -push)
-    return out
+    return _contact(_positions(pos), radius_m=radius_m, range_m=range_m, gain=gain)[0]
 
 
 def obstacle_repulsion(
@@ -372,6 +403,308 @@ def tangential_part(force: ArrayLike, pos: ArrayLike, leader_xy: ArrayLike) -> F
     return np.stack([ft * tx, ft * ty], axis=1)
 
 
+def ring_spacing(
+    pos: ArrayLike,
+    leader_xy: ArrayLike,
+    *,
+    stiffness_n_m: float,
+    active: ArrayLike | None = None,
+) -> FloatArray:
+    """Angular-neighbour spacing force of the ``"regular"`` law (Wang, Xie and Cao 2013).
+
+    Parameters
+    ----------
+    pos : array_like, shape (N, 2)
+        Robot positions [m].
+    leader_xy : array_like, shape (2,)
+        The virtual leader [m].
+    stiffness_n_m : float
+        K_s [N/m].
+    active : array_like of bool, shape (N,), optional
+        Robots in the team (default all); the others neither push nor are pushed.
+
+    Returns
+    -------
+    ndarray, shape (N, 2)
+        ``K_s r_k (g_k+ - g_k-) / 2 t_k`` [N]: ``g_k+`` the angle about the leader from
+        robot k to the next active robot counter-clockwise, ``g_k-`` from the previous
+        one to robot k, ``r_k`` the robot's distance from the leader and ``t_k`` the
+        unit tangent (counter-clockwise). Zero for one robot, for an inactive robot and
+        for a robot on the leader (no angle).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pos = np.array([[2.0, 0.0], [0.0, 2.0], [-2.0, 0.0]])  # at 0, 90 and 180 deg
+    >>> # gaps 90, 90 and 180 deg: robots 1 and 3 move into the empty half, robot 2 stays
+    >>> ring_spacing(pos, [0.0, 0.0], stiffness_n_m=1.0).round(4) + 0.0
+    array([[ 0.    , -1.5708],
+           [ 0.    ,  0.    ],
+           [ 0.    , -1.5708]])
+    """
+    p = _positions(pos)
+    d = p - as_float_array(leader_xy, "leader_xy", (2,))
+    use = (d * d).sum(axis=1) > 0
+    if active is not None:
+        use &= np.asarray(active, dtype=bool).reshape(-1)
+    return _ring_spacing(d, use, stiffness_n_m)[0]
+
+
+def _ring_spacing(d: FloatArray, use: BoolArray, stiffness_n_m: float) -> tuple[FloatArray, float]:
+    """:func:`ring_spacing` from the offsets ``d = p - c`` (N, 2) of the robots ``use``
+    (not on the leader), and the largest ``|g+ - g-|`` [rad]."""
+    out = np.zeros_like(d)
+    idx = np.flatnonzero(use)
+    if idx.size < 2 or stiffness_n_m == 0:
+        return out, 0.0
+    theta = np.arctan2(d[idx, 1], d[idx, 0])
+    order = np.argsort(theta, kind="stable")
+    th = theta[order]
+    ahead = np.empty_like(th)  # gap to the next robot counter-clockwise
+    ahead[:-1] = th[1:] - th[:-1]
+    ahead[-1] = th[0] + 2.0 * math.pi - th[-1]
+    behind = np.roll(ahead, 1)
+    k = idx[order]
+    diff = ahead - behind
+    ft = (0.5 * stiffness_n_m) * diff  # per unit radius [N/m]
+    out[k, 0] = -ft * d[k, 1]  # ft r t, with r t = (-dy, dx)
+    out[k, 1] = ft * d[k, 0]
+    return out, float(np.abs(diff).max())
+
+
+def _firas_slope(gap: FloatArray, range_m: float, gain: float) -> FloatArray:
+    """``|dF/dg|`` of the FIRAS magnitude for gaps g < rho (0 beyond) [N/m]."""
+    g = np.maximum(gap, _MIN_GAP_M)
+    slope = gain * np.abs(3.0 / g**4 - 2.0 / (range_m * g**3))
+    out: FloatArray = np.where((gap < range_m) & (gap > _MIN_GAP_M), slope, 0.0)
+    return out
+
+
+def formation_force_and_stiffness(
+    pos: ArrayLike,
+    leader_xy: ArrayLike,
+    params: FormationParams,
+    *,
+    law: Literal["deliverable", "regular"] = "deliverable",
+    active: ArrayLike | None = None,
+    obstacles: tuple[ArrayLike, ArrayLike] | None = None,
+    body_radius_m: float | None = None,
+    contact_range_m: float | None = None,
+    pairs: NDArray[np.intp] | None = None,
+    block_elems: int = BLOCK_ELEMS,
+) -> tuple[FloatArray, float]:
+    """The formation force and a bound on its stiffness (see :func:`formation_force`).
+
+    Parameters
+    ----------
+    pos, leader_xy, params, law, active, obstacles, body_radius_m, block_elems
+        As :func:`formation_force`.
+    contact_range_m : float, optional
+        Range of the robot-robot contact force [m] (default ``params.contact_range_m``).
+    pairs : ndarray of int, shape (P, 2), optional
+        Candidate pairs for the contact force, including every pair of robots closer
+        than ``2 body_radius_m + contact_range_m`` (default: found now,
+        :func:`contact_pairs`).
+
+    Returns
+    -------
+    force : ndarray, shape (N, 2)
+        Force [N] (zero for inactive robots).
+    stiffness_n_m : float
+        An upper bound on the spectral radius of the force's Jacobian [N/m], from
+        Gershgorin's theorem: per robot, the attraction's ``a max(|3 r^2 - alpha^2|,
+        |r^2 - alpha^2|)`` (``limit / r`` where capped), ``2 sum_i`` of each pair's
+        stiffness (Coulomb ``2 k_r q_k q_i / r^3``, contact ``max(|F'(g)|, F / r)``),
+        the obstacles' ``max(|F'(g)|, F / r)``; the largest over the robots, plus the
+        spacing law's ``K_s (2 + max |g+ - g-|)`` (its Jacobian is similar, by the
+        robots' radii, to one of spectral radius 2 K_s; the rest is the turning of the
+        tangent and the radius' lever).
+    """
+    p = _positions(pos)
+    n = p.shape[0]
+    if law not in ("deliverable", "regular"):
+        raise InputError(f"law must be 'deliverable' or 'regular', got {law!r}")
+    alive: BoolArray = (
+        np.ones(n, dtype=bool) if active is None else np.asarray(active, dtype=bool).reshape(-1)
+    )
+    if alive.shape != (n,):
+        raise InputError(f"active must have shape ({n},), got {alive.shape}")
+    radius = params.robot_radius_m if body_radius_m is None else body_radius_m
+    reach = params.contact_range_m if contact_range_m is None else contact_range_m
+    c = as_float_array(leader_xy, "leader_xy", (2,))
+    alpha = params.alpha_m
+    a = params.attraction_gain
+    limit = params.attraction_limit_n
+    # eq. 6, as circle_attraction (the same arithmetic), and its stiffness per robot
+    d = p - c
+    r2 = (d * d).sum(axis=1)
+    off = r2 - alpha * alpha
+    f = -a * d * off[:, None]
+    stiff = a * np.maximum(np.abs(3.0 * r2 - alpha * alpha), np.abs(off))
+    if math.isfinite(limit):
+        mag = np.sqrt((f * f).sum(axis=1))
+        f *= np.minimum(1.0, limit / np.maximum(mag, 1e-300))[:, None]
+        capped = mag > limit
+        if capped.any():
+            stiff = np.where(capped, limit / np.maximum(np.sqrt(r2), 1e-300), stiff)
+    spacing_bound = 0.0
+    if law == "deliverable":
+        q = np.where(alive, params.charge_c, 0.0)
+        if params.k_r != 0 and n >= 2:
+            row = np.empty(n)
+            rep = _coulomb_sums(p, q, block_elems, row)
+            rep *= (params.k_r * q)[:, None]
+            f += rep
+            stiff += 4.0 * params.k_r * q * row
+    else:
+        ks = params.spacing_stiffness_n_m
+        spacing, widest = _ring_spacing(d, alive & (r2 > 0), ks)
+        f += spacing
+        spacing_bound = ks * (2.0 + widest)
+        contact, contact_stiff = _contact(
+            p, radius_m=radius, range_m=reach, gain=params.contact_gain, pairs=pairs
+        )
+        f += contact
+        stiff += contact_stiff
+    if obstacles is not None:
+        f += obstacle_repulsion(
+            p,
+            obstacles[0],
+            obstacles[1],
+            robot_radius_m=radius,
+            range_m=params.contact_range_m,
+            gain=params.contact_gain,
+        )
+        stiff += _obstacle_stiffness(
+            p, obstacles, radius, params.contact_range_m, params.contact_gain
+        )
+    f[~alive] = 0.0
+    stiff[~alive] = 0.0
+    return f, float(stiff.max(initial=0.0)) + spacing_bound
+
+
+def contact_pairs(pos: ArrayLike, reach_m: float) -> NDArray[np.intp]:
+    """Every pair of robots closer than ``reach_m`` (a k-d tree, O(N log N)).
+
+    Parameters
+    ----------
+    pos : array_like, shape (N, 2)
+        Robot centres [m].
+    reach_m : float
+        Distance [m].
+
+    Returns
+    -------
+    ndarray of int, shape (P, 2)
+        Pairs (i, j), i < j, with ``|p_i - p_j| <= reach_m``.
+
+    Notes
+    -----
+    Found with a reach ``2 R + rho + s`` (a skin s), the list stays a superset of the
+    pairs within ``2 R + rho`` until some robot has moved s / 2 (Verlet's neighbour
+    list, Phys. Rev. 159, 1967); the runner rebuilds it only then.
+    """
+    p = _positions(pos)
+    if p.shape[0] < 2:
+        return np.zeros((0, 2), dtype=np.intp)
+    out: NDArray[np.intp] = cKDTree(p).query_pairs(reach_m, output_type="ndarray")
+    return out
+
+
+def _contact(
+    p: FloatArray,
+    *,
+    radius_m: float,
+    range_m: float,
+    gain: float,
+    pairs: NDArray[np.intp] | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`contact_repulsion` and each robot's Gershgorin row sum of its stiffness.
+
+    ``pairs`` (P, 2): candidate pairs including every pair within ``2 R + rho``
+    (default: :func:`contact_pairs`)."""
+    n = p.shape[0]
+    out = np.zeros_like(p)
+    stiff = np.zeros(n)
+    if n < 2 or gain == 0:
+        return out, stiff
+    if pairs is None:
+        pairs = contact_pairs(p, 2.0 * radius_m + range_m)
+    if pairs.shape[0] == 0:
+        return out, stiff
+    k, i = pairs[:, 0], pairs[:, 1]
+    d = p[k] - p[i]
+    r = np.sqrt((d * d).sum(axis=1))
+    keep = (r > 0) & (r < 2.0 * radius_m + range_m)  # coincident bodies: no direction
+    k, i, d, r = k[keep], i[keep], d[keep], r[keep]
+    gap = r - 2.0 * radius_m
+    mag = _firas(gap, range_m, gain)
+    push = (mag / r)[:, None] * d
+    out[:, 0] = np.bincount(k, push[:, 0], n) - np.bincount(i, push[:, 0], n)
+    out[:, 1] = np.bincount(k, push[:, 1], n) - np.bincount(i, push[:, 1], n)
+    pair = 2.0 * np.maximum(_firas_slope(gap, range_m, gain), mag / r)
+    total = np.asarray(np.bincount(k, pair, n) + np.bincount(i, pair, n), dtype=np.float64)
+    return out, total
+
+
+def _obstacle_stiffness(
+    p: FloatArray,
+    obstacles: tuple[ArrayLike, ArrayLike],
+    robot_radius_m: float,
+    range_m: float,
+    gain: float,
+) -> FloatArray:
+    """Per robot, the obstacles' ``sum max(|F'(g)|, F / r)`` [N/m]."""
+    o = as_float_array(obstacles[0], "centres_m", (None, 2))
+    ro = as_float_array(obstacles[1], "radii_m", (o.shape[0],))
+    if o.shape[0] == 0 or gain == 0:
+        return np.zeros(p.shape[0])
+    d = p[:, None, :] - o[None, :, :]
+    r = np.sqrt((d * d).sum(axis=2))
+    gap = r - robot_radius_m - ro[None, :]
+    per = np.maximum(
+        _firas_slope(gap, range_m, gain), _firas(gap, range_m, gain) / np.maximum(r, 1e-12)
+    )
+    out: FloatArray = per.sum(axis=1)
+    return out
+
+
+def stiffness_bound(
+    pos: ArrayLike,
+    leader_xy: ArrayLike,
+    params: FormationParams,
+    *,
+    law: Literal["deliverable", "regular"] = "deliverable",
+    active: ArrayLike | None = None,
+    obstacles: tuple[ArrayLike, ArrayLike] | None = None,
+    body_radius_m: float | None = None,
+    contact_range_m: float | None = None,
+    block_elems: int = BLOCK_ELEMS,
+) -> float:
+    """An upper bound on the stiffness of the formation force at ``pos`` [N/m].
+
+    The second value of :func:`formation_force_and_stiffness` (see there).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> # one robot on the 3 m circle: the attraction's radial stiffness 2 a alpha^2
+    >>> stiffness_bound(np.array([[3.0, 0.0]]), [0.0, 0.0], FormationParams(alpha_m=3.0))
+    18.0
+    """
+    return formation_force_and_stiffness(
+        pos,
+        leader_xy,
+        params,
+        law=law,
+        active=active,
+        obstacles=obstacles,
+        body_radius_m=body_radius_m,
+        contact_range_m=contact_range_m,
+        block_elems=block_elems,
+    )[1]
+
+
 def formation_force(
     pos: ArrayLike,
     leader_xy: ArrayLike,
@@ -412,41 +745,13 @@ def formation_force(
     ndarray, shape (N, 2)
         Force [N] (zero for inactive robots).
     """
-    p = _positions(pos)
-    n = p.shape[0]
-    if law not in ("deliverable", "regular"):
-        raise InputError(f"law must be 'deliverable' or 'regular', got {law!r}")
-    alive: BoolArray = (
-        np.ones(n, dtype=bool) if active is None else np.asarray(active, dtype=bool).reshape(-1)
-    )
-    if alive.shape != (n,):
-        raise InputError(f"active must have shape ({n},), got {alive.shape}")
-    radius = params.robot_radius_m if body_radius_m is None else body_radius_m
-    c = as_float_array(leader_xy, "leader_xy", (2,))
-    f = circle_attraction(
-        p,
-        c,
-        alpha_m=params.alpha_m,
-        gain=params.attraction_gain,
-        limit_n=params.attraction_limit_n,
-    )
-    q = np.where(alive, params.charge_c, 0.0)
-    rep = coulomb_repulsion(p, k_r=params.k_r, charge=q, block_elems=block_elems)
-    if law == "deliverable":
-        f += rep
-    else:
-        f += params.spacing_gain * tangential_part(rep, p, c)
-        f += contact_repulsion(
-            p, radius_m=radius, range_m=params.contact_range_m, gain=params.contact_gain
-        )
-    if obstacles is not None:
-        f += obstacle_repulsion(
-            p,
-            obstacles[0],
-            obstacles[1],
-            robot_radius_m=radius,
-            range_m=params.contact_range_m,
-            gain=params.contact_gain,
-        )
-    f[~alive] = 0.0
-    return f
+    return formation_force_and_stiffness(
+        pos,
+        leader_xy,
+        params,
+        law=law,
+        active=active,
+        obstacles=obstacles,
+        body_radius_m=body_radius_m,
+        block_elems=block_elems,
+    )[0]

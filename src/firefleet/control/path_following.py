@@ -67,6 +67,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "PathFollowingController",
+    "arrival",
     "builtin_fis_path",
     "controller_inputs",
 ]
@@ -112,6 +113,49 @@ def controller_inputs(pose: ArrayLike, desired: ArrayLike) -> FloatArray:
     wrapped = (raw + np.pi) % (2.0 * np.pi) - np.pi
     alpha = np.where(d_rp > 0.0, np.where(wrapped >= np.pi, wrapped - 2.0 * np.pi, wrapped), 0.0)
     return np.stack([d_rp, x_err, y_err, alpha], axis=1)
+
+
+def arrival(
+    arrived: NDArray[np.bool_],
+    pose: ArrayLike,
+    end: ArrayLike,
+    release_index: int,
+    pieces: int,
+) -> NDArray[np.bool_]:
+    """The stop rule: which robots have arrived at their path's end (they then stay).
+
+    A robot arrives once the schedule has released its path's last point
+    (``release_index >= pieces``) and its pose is past the end along the path's end
+    tangent; from then on its set points are ``v = omega = 0`` for good.
+
+    Parameters
+    ----------
+    arrived : ndarray of bool, shape (N,)
+        Which robots had arrived before.
+    pose : array_like, shape (N, 3)
+        Poses x [m], y [m], phi [rad] (the odometry estimate on a robot).
+    end : array_like, shape (N, 3)
+        Each path's end point x [m], y [m] and its heading there [rad].
+    release_index : int
+        The schedule's release index (:meth:`firefleet.planning.Trajectory.release_index`).
+    pieces : int
+        Number of pieces of every path.
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        Which robots have arrived now.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> arrival(np.zeros(2, bool), [[5.1, 0, 0], [4.9, 0, 0]], [[5, 0, 0]] * 2, 50, 50)
+    array([ True, False])
+    """
+    p = as_float_array(pose, "pose", (None, 3))
+    e = as_float_array(end, "end", (p.shape[0], 3))
+    past_end = (e[:, 0] - p[:, 0]) * np.cos(e[:, 2]) + (e[:, 1] - p[:, 1]) * np.sin(e[:, 2])
+    return np.asarray(arrived | ((release_index >= pieces) & (past_end <= 0.0)))
 
 
 @dataclass(frozen=True, eq=False)

@@ -20,12 +20,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError, check_fields
 
-__all__ = ["PidParams", "PidState", "pid_init", "pid_step"]
+__all__ = ["PidParams", "PidState", "pid_init", "pid_step", "pid_step_one"]
+
+PidGains = tuple[float, float, float, float, float, float, float]
+"""kp, ki, kd, derivative_filter_s, setpoint_weight, tracking_time_s, output_limit."""
 
 FloatArray = NDArray[np.float64]
 
@@ -96,6 +100,19 @@ class PidParams:
                 f"speed_pid.setpoint_weight must be in [0, 1], got {self.setpoint_weight}"
             )
 
+    @property
+    def gains(self) -> PidGains:
+        """The seven numbers :func:`pid_step_one` takes, in its order (:data:`PidGains`)."""
+        return (
+            float(self.kp),
+            float(self.ki),
+            float(self.kd),
+            float(self.derivative_filter_s),
+            float(self.setpoint_weight),
+            float(self.tracking_time_s),
+            float(self.output_limit),
+        )
+
 
 @dataclass(frozen=True)
 class PidState:
@@ -157,3 +174,43 @@ def pid_step(
     u_sat = np.clip(u, -params.output_limit, params.output_limit)
     integral = state.integral + dt_s * (params.ki * (r - y) + (u_sat - u) / params.tracking_time_s)
     return PidState(integral=integral, derivative=d, last_measurement=y.copy()), u_sat
+
+
+@numba.njit(cache=True)
+def pid_step_one(
+    integral: float,
+    derivative: float,
+    last_measurement: float,
+    reference: float,
+    measurement: float,
+    gains: PidGains,
+    dt_s: float,
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """:func:`pid_step` of one controller, compiled (numba) for the simulator's kernels.
+
+    The same operations in the same order as the array form, the clip written as two
+    comparisons: the same result bit for bit (tests/control/test_pid.py).
+
+    Parameters
+    ----------
+    integral, derivative, last_measurement : float
+        The controller's memory (:class:`PidState`'s fields) [V], [V], [rad/s].
+    reference, measurement : float
+        r and y of this period [rad/s].
+    gains : tuple of 7 float
+        :attr:`PidParams.gains`.
+    dt_s : float
+        Control period [s].
+
+    Returns
+    -------
+    integral, derivative, output : float
+        The new integral and filtered derivative [V] (the new last measurement is
+        ``measurement``) and the saturated output u_sat [V].
+    """
+    kp, ki, kd, tf, b, tt, lim = gains
+    d = (tf * derivative - kd * (measurement - last_measurement)) / (tf + dt_s)
+    u = kp * (b * reference - measurement) + integral + d
+    u_sat = -lim if u < -lim else (lim if u > lim else u)
+    new_integral = integral + dt_s * (ki * (reference - measurement) + (u_sat - u) / tt)
+    return new_integral, d, u_sat

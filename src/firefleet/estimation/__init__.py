@@ -12,6 +12,7 @@ from firefleet.estimation.fastslam import (
     fastslam_init,
     fastslam_step,
     run_fastslam,
+    slam_claims,
     slam_summary,
 )
 from firefleet.estimation.logs import SlamLog, format_log, gtsam_text, read_log
@@ -33,5 +34,6 @@ __all__ = [
     "read_log",
     "run_fastslam",
     "run_mcl",
+    "slam_claims",
     "slam_summary",
 ]

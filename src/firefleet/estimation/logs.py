@@ -72,6 +72,9 @@ _FIELDS = {
     "TRUTH_LANDMARK": 3,
     FORMAT_TAG: 1,
 }
+MAX_ABS_VALUE = 1e12
+"""Largest magnitude of a number in a log (metres, radians, their variances, seconds):
+the filter squares and multiplies them, and 1e308 would overflow to inf silently."""
 _INT_FIELDS = {"ODOMETRY": 2, "LANDMARK": 2, "BR": 2, "TRUTH_POSE": 1, "TRUTH_LANDMARK": 1}
 
 
@@ -149,6 +152,23 @@ class SlamLog:
 def _upper3(c: list[float]) -> FloatArray:
     c11, c12, c13, c22, c23, c33 = c
     return np.array([[c11, c12, c13], [c12, c22, c23], [c13, c23, c33]])
+
+
+_FIELD_NO = {("ODOMETRY", "c11"): 6, ("ODOMETRY", "c22"): 9, ("ODOMETRY", "c33"): 11}
+_FIELD_NO |= {("LANDMARK", "c11"): 5, ("LANDMARK", "c22"): 7}
+
+
+def _check_variances(
+    where: str, tag: str, variances: dict[str, float], *, strict: bool = False
+) -> None:
+    """A variance (a covariance's diagonal) must be >= 0 (> 0 with ``strict``)."""
+    for name, value in variances.items():
+        if value < 0.0 or (strict and value == 0.0):
+            bound = "> 0" if strict else ">= 0"
+            raise InputError(
+                f"{where}: {tag} variance {name} (field {_FIELD_NO[tag, name]}) must be "
+                f"{bound}, got {value:g}"
+            )
 
 
 def _landmark_to_polar(
@@ -240,6 +260,12 @@ def parse_log(lines: Iterable[str], *, name: str = "<log>") -> SlamLog:
             raise InputError(f"{where}: {tag} has a field that is not a number: {text!r}") from None
         if not all(math.isfinite(v) for v in nums):
             raise InputError(f"{where}: {tag} has a non-finite number: {text!r}")
+        big = next((k for k, v in enumerate(nums) if abs(v) > MAX_ABS_VALUE), None)
+        if big is not None:
+            raise InputError(
+                f"{where}: {tag} field {1 + n_int + big} is {words[1 + n_int + big]}: beyond "
+                f"{MAX_ABS_VALUE:g}, not a measurement (its squares would overflow)"
+            )
         if tag == FORMAT_TAG:
             if int(nums[0]) != FORMAT_VERSION:
                 raise InputError(f"{where}: unsupported {FORMAT_TAG} version {words[1]}")
@@ -251,6 +277,7 @@ def parse_log(lines: Iterable[str], *, name: str = "<log>") -> SlamLog:
                 raise InputError(
                     f"{where}: ODOMETRY from pose {i}, but the chain is at pose {pose_ids[-1]}"
                 )
+            _check_variances(where, tag, {"c11": nums[3], "c22": nums[6], "c33": nums[8]})
             cov = _upper3(nums[3:])
             if np.any(np.linalg.eigvalsh(cov) < -1e-12):
                 raise InputError(f"{where}: ODOMETRY covariance is not positive semi-definite")
@@ -261,6 +288,12 @@ def parse_log(lines: Iterable[str], *, name: str = "<log>") -> SlamLog:
             dx, dy, c11, c12, c22 = nums
             if dx == 0.0 and dy == 0.0:
                 raise InputError(f"{where}: LANDMARK at zero range")
+            _check_variances(where, tag, {"c11": c11, "c22": c22}, strict=True)
+            if c12 * c12 >= c11 * c22:
+                raise InputError(
+                    f"{where}: LANDMARK covariance is not positive definite: "
+                    f"c12 = {c12:g} needs c12^2 < c11 c22 = {c11 * c22:g}"
+                )
             r, b, cov = _landmark_to_polar(dx, dy, c11, c12, c22)
             obs.append((ints[0], ints[1], r, b, cov, lineno))
         elif tag == "BR":

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError
 
-__all__ = ["EncoderParams", "EncoderState", "encoder_init", "encoder_step"]
+__all__ = ["EncoderParams", "EncoderState", "encoder_init", "encoder_step", "encoder_step_one"]
 
 FloatArray = NDArray[np.float64]
 
@@ -51,6 +52,25 @@ class EncoderParams:
         if self.counts_per_rev == 0:
             return 0.0
         return 2.0 * np.pi / (self.counts_per_rev * self.window_steps * dt_s)
+
+    @property
+    def counts_per_rad(self) -> float:
+        """Counts per radian of shaft angle, ``counts_per_rev / 2 pi``; 0 for an ideal sensor.
+
+        The first constant of :func:`encoder_step_one`.
+        """
+        return self.counts_per_rev / (2.0 * np.pi) if self.counts_per_rev else 0.0
+
+    @property
+    def count_angle_rad(self) -> float:
+        """Shaft angle of one count [rad], ``2 pi / counts_per_rev``; 1 for an ideal sensor
+        (whose counts are angles)."""
+        return 2.0 * np.pi / self.counts_per_rev if self.counts_per_rev else 1.0
+
+    def speed_per_count(self, dt_s: float) -> float:
+        """Measured speed of one count over the window [rad/s], as :func:`encoder_step`
+        computes it; the second constant of :func:`encoder_step_one`."""
+        return self.count_angle_rad / (self.window_steps * dt_s)
 
 
 @dataclass(frozen=True)
@@ -115,3 +135,41 @@ def encoder_step(
     scale = 1.0 if params.counts_per_rev == 0 else 2.0 * np.pi / params.counts_per_rev
     speed = (history[-1] - history[0]) * (scale / (params.window_steps * dt_s))
     return EncoderState(angle_rad=angle, history=history), counts, speed
+
+
+@numba.njit(cache=True)
+def encoder_step_one(
+    angle_rad: float,
+    dphi_rad: float,
+    window_start_count: float,
+    counts_per_rad: float,
+    speed_per_count: float,
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """:func:`encoder_step` of one shaft, compiled (numba) for the simulator's kernels.
+
+    The caller keeps the count history; this takes the count ``window_steps`` samples
+    back. The same operations as the array form: the same result bit for bit
+    (tests/models/test_encoder.py).
+
+    Parameters
+    ----------
+    angle_rad : float
+        True shaft angle before the step [rad].
+    dphi_rad : float
+        Angle turned since the last sample [rad].
+    window_start_count : float
+        The count ``window_steps`` samples before this one (``history[1]`` of
+        :class:`EncoderState` before the step).
+    counts_per_rad : float
+        :attr:`EncoderParams.counts_per_rad` (0: an ideal sensor, counts are angles).
+    speed_per_count : float
+        :meth:`EncoderParams.speed_per_count` at the sampling period.
+
+    Returns
+    -------
+    angle_rad, count, speed_rad_s : float
+        The new angle [rad], the new count and the measured speed [rad/s].
+    """
+    angle = angle_rad + dphi_rad
+    count = np.floor(angle * counts_per_rad) if counts_per_rad > 0.0 else angle
+    return angle, count, (count - window_start_count) * speed_per_count

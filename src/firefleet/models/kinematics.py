@@ -10,8 +10,10 @@ v / omega to rounding error at any step size.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -19,11 +21,14 @@ from firefleet.errors import as_float_array, check_fields
 
 __all__ = [
     "RobotGeometry",
+    "arc_step_one",
     "body_to_wheels",
     "diff_drive_step",
+    "diff_drive_step_one",
     "unicycle_step",
     "wheels_to_body",
     "wrap_angle",
+    "wrap_angle_one",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -54,6 +59,21 @@ def wrap_angle(angle_rad: ArrayLike) -> FloatArray:
     w = (a + np.pi) % (2.0 * np.pi) - np.pi
     # a hair below an odd multiple of -pi, the modulo rounds up to 2 pi: give -pi, not +pi
     return np.asarray(np.where(w >= np.pi, w - 2.0 * np.pi, w), dtype=np.float64)
+
+
+@numba.njit(cache=True)
+def wrap_angle_one(angle_rad: float) -> float:  # pragma: no cover - compiled
+    """:func:`wrap_angle` of one angle, compiled (numba) for the simulator's kernels.
+
+    The same operations as the array form, so the same result bit for bit. An angle
+    already in [-pi, pi) skips the modulo: ``fmod(x, 2 pi)`` of ``0 <= x < 2 pi`` is
+    ``x`` itself, so that shortcut changes no bit (tests/models/test_kinematics.py).
+    """
+    shifted = angle_rad + math.pi
+    if not 0.0 <= shifted < 2.0 * math.pi:
+        shifted = shifted % (2.0 * math.pi)
+    w = shifted - math.pi
+    return w - 2.0 * math.pi if w >= math.pi else w
 
 
 def body_to_wheels(v_m_s: ArrayLike, omega_rad_s: ArrayLike, geometry: RobotGeometry) -> FloatArray:
@@ -114,6 +134,64 @@ def _arc_step(pose: FloatArray, ds: FloatArray, dtheta: FloatArray) -> FloatArra
     out[:, 1] = pose[:, 1] + chord * np.sin(theta + half)
     out[:, 2] = wrap_angle(theta + dtheta)
     return out
+
+
+@numba.njit(cache=True)
+def arc_step_one(
+    x_m: float, y_m: float, theta_rad: float, ds_m: float, dtheta_rad: float
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """One pose moved along an arc of length ``ds_m`` turning by ``dtheta_rad`` (exact).
+
+    The scalar, compiled (numba) form of the arc step of :func:`unicycle_step` and
+    :func:`diff_drive_step`, for the simulator's kernels: the same operations in the
+    same order, the same Taylor branch of sin(h)/h below ``|h| < 1e-4``. Its sin and cos
+    are the C library's; NumPy's vectorised ones may differ in the last bit.
+
+    Returns
+    -------
+    x_m, y_m, theta_rad : float
+        The pose after the step, theta wrapped to [-pi, pi).
+    """
+    half = 0.5 * dtheta_rad
+    sinc = 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
+    chord = ds_m * sinc
+    heading = theta_rad + half
+    return (
+        x_m + chord * math.cos(heading),
+        y_m + chord * math.sin(heading),
+        wrap_angle_one(theta_rad + dtheta_rad),
+    )
+
+
+@numba.njit(cache=True)
+def diff_drive_step_one(
+    x_m: float,
+    y_m: float,
+    theta_rad: float,
+    dphi_right_rad: float,
+    dphi_left_rad: float,
+    wheel_radius_m: float,
+    axle_length_m: float,
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """:func:`diff_drive_step` of one robot, compiled (numba) for the simulator's kernels.
+
+    Parameters
+    ----------
+    x_m, y_m, theta_rad : float
+        The pose.
+    dphi_right_rad, dphi_left_rad : float
+        Angles turned by the right and left wheels during the step [rad].
+    wheel_radius_m, axle_length_m : float
+        The geometry (:class:`RobotGeometry`).
+
+    Returns
+    -------
+    x_m, y_m, theta_rad : float
+        The pose after the step (:func:`arc_step_one`).
+    """
+    ds = wheel_radius_m * (dphi_right_rad + dphi_left_rad) / 2.0
+    dtheta = wheel_radius_m * (dphi_right_rad - dphi_left_rad) / axle_length_m
+    return arc_step_one(x_m, y_m, theta_rad, ds, dtheta)
 
 
 def unicycle_step(

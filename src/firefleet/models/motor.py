@@ -20,13 +20,19 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError, check_fields
 
-__all__ = ["DiscreteMotor", "MotorParams", "discretise_motor", "motor_step"]
+__all__ = ["DiscreteMotor", "MotorParams", "discretise_motor", "motor_step", "motor_step_one"]
+
+MotorCoefficients = tuple[
+    float, float, float, float, float, float, float, float, float, float, float, float
+]
+"""The twelve numbers of a :class:`DiscreteMotor` for :func:`motor_step_one`."""
 
 FloatArray = NDArray[np.float64]
 
@@ -128,6 +134,29 @@ class DiscreteMotor:
     c_ad: FloatArray = field(repr=False)
     c_bd: FloatArray = field(repr=False)
 
+    @property
+    def coefficients(self) -> MotorCoefficients:
+        """``ad`` (row by row), ``bd`` (row by row), ``c_ad``, ``c_bd``: 12 floats.
+
+        What :func:`motor_step_one` takes (a tuple of floats passes into compiled code
+        by value, without the reference counting of arrays).
+        """
+        a, b, c, d = self.ad, self.bd, self.c_ad, self.c_bd
+        return (
+            float(a[0, 0]),
+            float(a[0, 1]),
+            float(a[1, 0]),
+            float(a[1, 1]),
+            float(b[0, 0]),
+            float(b[0, 1]),
+            float(b[1, 0]),
+            float(b[1, 1]),
+            float(c[0]),
+            float(c[1]),
+            float(d[0]),
+            float(d[1]),
+        )
+
 
 @functools.lru_cache(maxsize=64)
 def discretise_motor(params: MotorParams, dt_s: float) -> DiscreteMotor:
@@ -201,3 +230,39 @@ def motor_step(
     w_next = ad[1, 0] * i + ad[1, 1] * w + bd[1, 0] * v + bd[1, 1] * tl
     dphi = cad[0] * i + cad[1] * w + cbd[0] * v + cbd[1] * tl
     return i_next, w_next, dphi
+
+
+@numba.njit(cache=True)
+def motor_step_one(
+    current_a: float,
+    speed_rad_s: float,
+    voltage_v: float,
+    load_torque_n_m: float,
+    coefficients: MotorCoefficients,
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """:func:`motor_step` of one motor, compiled (numba) for the simulator's kernels.
+
+    The same products summed in the same order as the array form: the same result bit
+    for bit (tests/models/test_motor.py).
+
+    Parameters
+    ----------
+    current_a, speed_rad_s : float
+        State: armature current [A] and shaft speed [rad/s].
+    voltage_v, load_torque_n_m : float
+        Inputs held over the step: voltage [V] and load torque [N m].
+    coefficients : tuple of 12 float
+        :attr:`DiscreteMotor.coefficients`.
+
+    Returns
+    -------
+    current_a, speed_rad_s, dphi_rad : float
+        State after the step and the angle turned during it [rad].
+    """
+    a00, a01, a10, a11, b00, b01, b10, b11, c0, c1, d0, d1 = coefficients
+    i, w, v, tl = current_a, speed_rad_s, voltage_v, load_torque_n_m
+    return (
+        a00 * i + a01 * w + b00 * v + b01 * tl,
+        a10 * i + a11 * w + b10 * v + b11 * tl,
+        c0 * i + c1 * w + d0 * v + d1 * tl,
+    )

@@ -53,9 +53,20 @@ def _command(result: SimResult) -> Formation:
 
 def _arrays(result: SimResult) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
     points = np.asarray(result.extra["formation_xy_m"], dtype=np.float64)
-    leader = np.asarray(result.extra["leader_xy"], dtype=np.float64)
+    leader = np.asarray(result.extra["leader_xy_m"], dtype=np.float64)
     active = np.asarray(result.extra["robot_active"]) > 0.5
     return points, leader, active
+
+
+_LEGEND_MAX = 10
+"""Teams larger than this get one legend entry for all their robots."""
+
+
+def _robot_label(k: int, n: int) -> str | None:
+    """Legend label of robot k (from 0) of n: each its own, or one for a large team."""
+    if n <= _LEGEND_MAX:
+        return f"robot {k + 1}"
+    return f"robots 1-{n}" if k == 0 else None
 
 
 def _polygon(ax: Any, points: FloatArray, leader: FloatArray, color: str, **kw: Any) -> Any:
@@ -71,7 +82,7 @@ def _scene(ax: Any, result: SimResult, cmd: Formation) -> None:
     plt = _pyplot()
     for o in cmd.obstacles:
         ax.add_patch(plt.Circle((o.x_m, o.y_m), o.radius_m, color="0.35", alpha=0.8, zorder=1))
-    leader = np.asarray(result.extra["leader_xy"])
+    leader = np.asarray(result.extra["leader_xy_m"])
     if np.ptp(leader, axis=0).max() > 0:
         ax.plot(leader[:, 0], leader[:, 1], "k--", lw=1, label="virtual leader's path")
     ax.set_aspect("equal")
@@ -92,16 +103,23 @@ def _trajectories(result: SimResult, cmd: Formation) -> bytes:
     height = float(np.clip(6.0 * span[1] / span[0], 3.0, 7.0))
     fig, ax = plt.subplots(figsize=(9.0, height + 1.2))
     _scene(ax, result, cmd)
+    many = n > _LEGEND_MAX  # a team: one legend entry, thinner lines, smaller marks
     for k in range(n):
-        ax.plot(pose[:, k, 0], pose[:, k, 1], color=colors[k], lw=1.3, label=f"robot {k + 1}")
-        ax.plot(pose[0, k, 0], pose[0, k, 1], "o", color=colors[k], mfc="none", ms=7)
+        ax.plot(
+            pose[:, k, 0],
+            pose[:, k, 1],
+            color=colors[k],
+            lw=0.5 if many else 1.3,
+            label=_robot_label(k, n),
+        )
+        ax.plot(pose[0, k, 0], pose[0, k, 1], "o", color=colors[k], mfc="none", ms=3 if many else 7)
         failed = not active[-1, k]
         ax.plot(
             pose[-1, k, 0],
             pose[-1, k, 1],
             "X" if failed else "s",
             color=colors[k],
-            ms=10 if failed else 7,
+            ms=10 if failed else (3 if many else 7),
         )
         if failed:
             ax.annotate(
@@ -161,7 +179,13 @@ def _shape(result: SimResult, cmd: Formation) -> bytes:
     colors = plt.get_cmap("tab10")(np.arange(r.shape[1]) % 10)
     for k in range(r.shape[1]):
         err = np.where(active[:, k], np.abs(r[:, k] - cmd.alpha_m), np.nan)
-        ax.semilogy(t, np.maximum(err, 1e-6), color=colors[k], lw=1.1, label=f"robot {k + 1}")
+        ax.semilogy(
+            t,
+            np.maximum(err, 1e-6),
+            color=colors[k],
+            lw=0.5 if r.shape[1] > _LEGEND_MAX else 1.1,
+            label=_robot_label(k, r.shape[1]),
+        )
     ax.set_ylabel("| distance to leader - alpha | [m]")
     ax.set_ylim(1e-6, None)
     ax.legend(fontsize=7, ncol=3, loc="upper right")

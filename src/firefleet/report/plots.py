@@ -1,4 +1,5 @@
-"""Figures of a run, by the kind of its command.
+"""Figures of a run: those its task kind draws (:mod:`firefleet.sim.registry`), and the
+motor runs' figures.
 
 matplotlib is imported only inside ``firefleet.report`` (this module and the topic
 modules beside it), and only when a figure is made.
@@ -7,6 +8,8 @@ modules beside it), and only when a figure is made.
 from __future__ import annotations
 
 import io
+from collections.abc import Callable
+from typing import cast
 
 import matplotlib
 
@@ -14,11 +17,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from firefleet.scenarios.schema import PathFollowing, VoltageStep, WheelSpeedStep
-from firefleet.sim.metrics import Metrics
+from firefleet.scenarios.schema import VoltageStep, WheelSpeedStep
+from firefleet.sim.registry import Metrics, task_kind
 from firefleet.sim.result import SimResult
 
-__all__ = ["figures"]
+__all__ = ["figures", "voltage_step_figures", "wheel_speed_step_figures"]
 
 
 def _png(fig: matplotlib.figure.Figure) -> bytes:
@@ -34,42 +37,53 @@ def _band(ax: matplotlib.axes.Axes, target: float) -> None:
     ax.axhspan(target - half, target + half, color="tab:green", alpha=0.15, label="2 % band")
 
 
-def _motor_response(result: SimResult) -> bytes:
+def _speed_reference(ax: matplotlib.axes.Axes, result: SimResult) -> None:
+    """The closed loop's reference, the encoder's speed and the 2 % band (Figure 25)."""
+    cmd = cast(WheelSpeedStep, result.scenario.command)
+    t = result.t
+    ax.plot(t, result.wheel_speed_ref_rad_s[:, 0, 0], "k--", lw=1.2, label="reference")
+    ax.plot(
+        t,
+        result.wheel_speed_measured_rad_s[:, 0, 0],
+        color="0.7",
+        lw=0.5,
+        label=f"encoder ({result.scenario.encoder.counts_per_rev} counts/rev)",
+    )
+    _band(ax, cmd.speed_rad_s)
+
+
+def _voltage_input(ax: matplotlib.axes.Axes, result: SimResult) -> None:
+    """The open loop's input voltage and the analytic steady speed (Figure 24)."""
+    cmd = cast(VoltageStep, result.scenario.command)
+    t = result.t
+    level = cmd.voltage_v * np.where(t >= cmd.start_s - 1e-9, 1.0, 0.0)
+    ax.plot(
+        t,
+        level,
+        "k--",
+        lw=1.2,
+        label=f'input {cmd.voltage_v:g} V (the deliverable\'s "reference")',
+    )
+    steady = cmd.voltage_v * result.scenario.motor.speed_gain_rad_s_per_v
+    ax.axhline(
+        steady,
+        color="tab:red",
+        ls=":",
+        lw=1.2,
+        label=f"Kt V / (R B + Ke Kt) = {steady:.4f} rad/s",
+    )
+
+
+def _motor_response(
+    result: SimResult, draw_input: Callable[[matplotlib.axes.Axes, SimResult], None]
+) -> bytes:
     """Speed, current and voltage against time (the layout of Figures 24 and 25)."""
     scn = result.scenario
     t = result.t
     w = result.wheel_speed_rad_s[:, 0, 0]  # robot 0, right wheel: all wheels are alike
-    cmd = scn.command
     fig, axes = plt.subplots(3, 1, figsize=(8, 7.5), sharex=True, height_ratios=[3, 2, 1.4])
     ax = axes[0]
-    if isinstance(cmd, WheelSpeedStep):
-        ax.plot(t, result.wheel_speed_ref_rad_s[:, 0, 0], "k--", lw=1.2, label="reference")
-        ax.plot(
-            t,
-            result.wheel_speed_measured_rad_s[:, 0, 0],
-            color="0.7",
-            lw=0.5,
-            label=f"encoder ({scn.encoder.counts_per_rev} counts/rev)",
-        )
-        _band(ax, cmd.speed_rad_s)
-    else:
-        assert isinstance(cmd, VoltageStep)
-        level = cmd.voltage_v * np.where(t >= cmd.start_s - 1e-9, 1.0, 0.0)
-        ax.plot(
-            t,
-            level,
-            "k--",
-            lw=1.2,
-            label=f'input {cmd.voltage_v:g} V (the deliverable\'s "reference")',
-        )
-        steady = cmd.voltage_v * scn.motor.speed_gain_rad_s_per_v
-        ax.axhline(
-            steady,
-            color="tab:red",
-            ls=":",
-            lw=1.2,
-            label=f"Kt V / (R B + Ke Kt) = {steady:.4f} rad/s",
-        )
+    draw_input(ax, result)
     ax.plot(t, w, color="tab:blue", lw=1.8, label="actual speed")
     if scn.load.torque_n_m != 0 and scn.load.start_s < t[-1]:
         for a in axes:
@@ -104,8 +118,7 @@ def _motor_response(result: SimResult) -> bytes:
 def _transients(result: SimResult, metrics: Metrics) -> bytes:
     """Zoom on the speed step and the load step, with the 2 % band and the measured times."""
     scn = result.scenario
-    cmd = scn.command
-    assert isinstance(cmd, WheelSpeedStep)
+    cmd = cast(WheelSpeedStep, scn.command)
     t = result.t
     windows: list[tuple[str, float, object]] = [
         ("speed step", cmd.start_s, metrics.get("settling_time_s"))
@@ -160,20 +173,19 @@ def _transients(result: SimResult, metrics: Metrics) -> bytes:
     return _png(fig)
 
 
+def voltage_step_figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
+    """The figures of a ``voltage-step`` run (Figure 24), PNG bytes by file name."""
+    return {"response.png": _motor_response(result, _voltage_input)}
+
+
+def wheel_speed_step_figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
+    """The figures of a ``wheel-speed-step`` run (Figure 25), PNG bytes by file name."""
+    return {
+        "response.png": _motor_response(result, _speed_reference),
+        "transients.png": _transients(result, metrics),
+    }
+
+
 def figures(result: SimResult, metrics: Metrics) -> dict[str, bytes]:
-    """The figures of a run, as PNG bytes by file name."""
-    cmd = result.scenario.command
-    if isinstance(cmd, PathFollowing):
-        from firefleet.report import path_following
-
-        return path_following.figures(result)
-    if cmd.kind == "formation":
-        from firefleet.report.formation import formation_figures
-
-        return formation_figures(result, metrics)
-    if not isinstance(cmd, VoltageStep | WheelSpeedStep):
-        raise ValueError(f"no figures for a {cmd.kind} scenario")
-    out = {"response.png": _motor_response(result)}
-    if isinstance(result.scenario.command, WheelSpeedStep):
-        out["transients.png"] = _transients(result, metrics)
-    return out
+    """The figures of a run, as PNG bytes by file name: those its task kind draws."""
+    return task_kind(result.scenario.command.kind).figures(result, metrics)

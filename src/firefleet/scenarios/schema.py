@@ -265,8 +265,8 @@ class Formation:
     k_r: float = 10.0
     charge_c: float = 1.0
     attraction_gain: float = 1.0
-    attraction_limit_n: float | None = None
-    spacing_gain: float = 1.0
+    attraction_limit_n: float | None = 10.0
+    spacing_stiffness_n_m: float = 20.0
     robot_radius_m: float = 0.15
     contact_gain: float = 0.05
     contact_range_m: float = 0.5
@@ -293,6 +293,49 @@ class Formation:
         _ = self.formation_params  # checks alpha_m, k_r, ... naming the field
 
     @property
+    def body_radius_m(self) -> float:
+        """Radius of the disc about each formation point that must stay clear [m]:
+        the body, or for a diff-drive robot the body plus its look-ahead distance."""
+        look = self.look_ahead_m if self.robot_model == "diff-drive" else 0.0
+        return self.robot_radius_m + look
+
+    def check_team(self, n_robots: int, duration_s: float) -> None:
+        """Check the command against the team's size and the run's length.
+
+        Raises
+        ------
+        InputError
+            If ``failure.robot`` is not in the team, ``formed_by_s`` is after the end,
+            or ``n_robots`` bodies of radius :attr:`body_radius_m` cannot stand on the
+            circle of radius ``alpha_m`` (the regular polygon's side, ``2 alpha sin(pi /
+            N)``, is shorter than a body's diameter).
+        """
+        if self.failure is not None and self.failure.robot > n_robots:
+            raise InputError(
+                f"command.failure.robot = {self.failure.robot}, but the team has "
+                f"{n_robots} robot(s)"
+            )
+        if self.formed_by_s > duration_s:
+            raise InputError(
+                f"command.formed_by_s = {self.formed_by_s} s is after the end of the run "
+                f"({duration_s} s)"
+            )
+        if n_robots < 2:
+            return
+        body = self.body_radius_m
+        side = 2.0 * self.alpha_m * math.sin(math.pi / n_robots)
+        if side < 2.0 * body:
+            what = "robot_radius_m + look_ahead_m" if self.robot_model == "diff-drive" else (
+                "robot_radius_m"
+            )
+            raise InputError(
+                f"command.alpha_m = {self.alpha_m} m is too small for {n_robots} robots of "
+                f"radius {body:g} m ({what}): neighbours on the circle would be "
+                f"{side:.3g} m apart, less than a body's diameter {2.0 * body:g} m; "
+                f"alpha_m must be at least {body / math.sin(math.pi / n_robots):.4g} m"
+            )
+
+    @property
     def formation_params(self) -> FormationParams:
         """The law's parameters (firefleet.control.formation.FormationParams)."""
         return FormationParams(
@@ -303,7 +346,7 @@ class Formation:
             attraction_limit_n=(
                 math.inf if self.attraction_limit_n is None else self.attraction_limit_n
             ),
-            spacing_gain=self.spacing_gain,
+            spacing_stiffness_n_m=self.spacing_stiffness_n_m,
             robot_radius_m=self.robot_radius_m,
             contact_gain=self.contact_gain,
             contact_range_m=self.contact_range_m,
@@ -326,48 +369,11 @@ class LoadStep:
     start_s: float = 0.0
 
 
-# The metrics each command kind produces (firefleet.sim.metrics computes them).
-METRICS: dict[str, tuple[str, ...]] = {
-    "voltage-step": (
-        "steady_speed_rad_s",
-        "steady_current_a",
-        "peak_current_a",
-        "time_constant_s",
-    ),
-    "wheel-speed-step": (
-        "rise_time_s",
-        "settling_time_s",
-        "overshoot_pct",
-        "steady_state_error_rad_s",
-        "disturbance_recovery_s",
-        "peak_current_a",
-        "max_voltage_v",
-    ),
-    "path-following": (
-        "path_lengths_m",
-        "wait_time_s",
-        "capture_time_s",
-        "cross_track_rms_m",
-        "cross_track_rms_after_capture_m",
-        "cross_track_max_after_capture_m",
-        "final_position_error_m",
-        "arrival_time_s",
-        "arrival_spread_s",
-        "mean_speed_m_s",
-        "longest_path_speed_margin_m_s",
-        "sync_distance_m",
-        "odometry_drift_m",
-        "peak_current_a",
-        "max_voltage_v",
-    ),
-    "formation": (
-        "radius_error_max_m",
-        "spacing_error_max_deg",
-        "min_clearance_m",
-        "radius_settling_time_s",
-        "final_radius_m",
-    ),
-}
+def _metric_names(kind: str) -> tuple[str, ...]:
+    """The metrics a command kind declares (its task kind, ``firefleet.sim.registry``)."""
+    from firefleet.sim.registry import task_kind  # lazy: the simulator imports this module
+
+    return task_kind(kind).metric_names
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
@@ -441,6 +447,8 @@ class Scenario:
             )
         if self.seed < 0:
             raise InputError(f"seed must be >= 0, got {self.seed}")
+        if isinstance(self.command, Formation):
+            self.command.check_team(self.n_robots, self.duration_s)
         if isinstance(self.command, PathFollowing):
             if len(self.command.paths) != self.n_robots:
                 raise InputError(
@@ -452,7 +460,7 @@ class Scenario:
                     f"command.trajectory_s ({self.command.trajectory_s} s) is longer than "
                     f"duration_s ({self.duration_s} s)"
                 )
-        known = METRICS[self.command.kind]
+        known = _metric_names(self.command.kind)
         for claim in self.claims:
             if claim.metric not in known:
                 raise InputError(
@@ -485,7 +493,7 @@ class Scenario:
     @property
     def metric_names(self) -> tuple[str, ...]:
         """The metrics this scenario's run produces."""
-        return METRICS[self.command.kind]
+        return _metric_names(self.command.kind)
 
 
 _ADAPTER = pydantic.TypeAdapter(Scenario)

@@ -43,6 +43,7 @@ from firefleet.models.motor import DiscreteMotor, MotorParams, discretise_motor,
 __all__ = [
     "DriveStack",
     "DriveState",
+    "dead_reckoning",
     "discretise_drive",
     "drive_init",
     "drive_step",
@@ -286,6 +287,28 @@ def speed_control(
     )
 
 
+def dead_reckoning(
+    pose: FloatArray, counts_before: FloatArray, counts_after: FloatArray, stack: DriveStack
+) -> FloatArray:
+    """Odometry: the poses moved by the wheels' count differences, nominal geometry.
+
+    Parameters
+    ----------
+    pose : ndarray, shape (N, 3)
+        Dead-reckoned poses before: x [m], y [m], theta [rad].
+    counts_before, counts_after : ndarray, shape (N, 2)
+        The encoders' counts (angles [rad] for an ideal encoder) at the two samples.
+    stack : DriveStack
+
+    Returns
+    -------
+    ndarray, shape (N, 3)
+        The poses after: an arc per period (:func:`firefleet.models.kinematics.diff_drive_step`).
+    """
+    counted = (counts_after - counts_before) * stack.count_angle_rad
+    return diff_drive_step(pose, counted, stack.geometry)
+
+
 def drive_step(
     state: DriveState,
     voltage_v: ArrayLike,
@@ -334,8 +357,7 @@ def drive_step(
     pose = diff_drive_step(state.pose, turned, stack.true_geometry)
     odometry = state.odometry
     if odometry is not None:
-        counted = (counts - state.encoder.history[-1]) * stack.count_angle_rad
-        odometry = diff_drive_step(odometry, counted, stack.geometry)
+        odometry = dead_reckoning(odometry, state.encoder.history[-1], counts, stack)
     return DriveState(
         pose=pose,
         current_a=current,

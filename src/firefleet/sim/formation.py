@@ -19,6 +19,25 @@ point, a point ``l`` ahead of the axle centre (Lawton, Beard and Young, "A decen
 approach to formation maneuvers", IEEE Trans. Robotics and Automation 19(6), 2003):
 its velocity is any u the wheels can give, so the point-mass law carries over.
 
+Stability (issue 13). Each step holds the force over ``dt_s`` (a sampled controller),
+and the exact step of eq. 5 under a held restoring force of stiffness kappa is stable
+only for kappa below about ``2 (B + k_d) / dt_s`` (400 N/m at the deliverable's 2 N s/m
+and 10 ms; :func:`substeps`). What made teams diverge, measured: with eq. 6 uncapped
+(the README's keys) 100 robots drawn up to 14 m from a 10 m circle start with an
+attraction of 909 N (r (r^2 - alpha^2)), meet within 0.08 s, and the contact force at
+its 1 mm gap floor (4e7 N, stiffness ~3 eta / g^4) and the Coulomb force (2 k_r / r^3
+per pair) are far beyond the bound: positions run off to hundreds of km (the same for
+20 robots on the 3 m circle, from 280 N at the corners). With the attraction capped,
+the first regular law (tangential Coulomb) still kicked robots apart (a 5e4 N contact
+at 0.7 s) and left robots 3.5 m inside the circle; the deliverable's law, 3.7 m (a ring
+of 100 charges walls late robots out: its field near the ring, ~2 k_r N / (2 pi alpha
+delta), beats a 10 N attraction). The remedies: the force's stiffness is bounded every
+step (:func:`firefleet.control.formation.stiffness_bound`) and the step divided into
+:func:`substeps` when needed; the regular law spaces by angular neighbours (stiffness
+2 K_s whatever N); the attraction is capped by default; a team that cannot stand on the
+circle is refused; and a run that still leaves every bound stops with
+:class:`FormationDivergedError` (no result is written).
+
 A failed robot stops where it is (a point mass is held; a diff-drive robot's wheel
 references drop to 0) and leaves the formation: it carries no charge and has no place
 on the circle, but its body stays, and the contact and obstacle forces see it.
@@ -33,7 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from firefleet.control.formation import formation_force
+from firefleet.control.formation import contact_pairs, formation_force_and_stiffness
 from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
 from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
@@ -49,12 +68,16 @@ from firefleet.sim.drive import (
 from firefleet.sim.result import SimResult
 
 __all__ = [
+    "DIVERGENCE_FACTOR",
+    "MAX_SUBSTEPS",
     "RADIUS_BAND",
+    "FormationDivergedError",
     "formation_metrics",
     "leader_trajectory",
     "simulate_formation",
     "spacing_error_deg",
     "start_positions",
+    "substeps",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -65,6 +88,25 @@ RADIUS_BAND = 0.05
 """Band of ``radius_settling_time_s``: within 5 % of alpha (the issue's bound)."""
 
 _MAX_PLACEMENT_ROUNDS = 10_000
+
+_SKIN_M = 0.5
+"""Skin of the contact pairs' Verlet list [m] (rebuilt when a robot moved half of it)."""
+
+MAX_SUBSTEPS = 10_000
+"""Most sub-steps one step of ``dt_s`` may be divided into (a stiffer force: an error)."""
+
+DIVERGENCE_FACTOR = 100.0
+"""A robot farther from the leader than this times (alpha + the farthest start from the
+leader + a body radius) has diverged: the run stops with :class:`FormationDivergedError`."""
+
+
+class FormationDivergedError(InputError):
+    """The formation's forces or positions grew without bound: no results are written.
+
+    An :class:`~firefleet.errors.InputError` (the command line prints its one-line
+    message and exits with status 2): the scenario's gains, radius or time step cannot
+    give a bounded run.
+    """
 
 
 def _command(scenario: Scenario) -> Formation:
@@ -186,17 +228,49 @@ def start_positions(scenario: Scenario, rng: np.random.Generator) -> FloatArray:
     )
 
 
-def _check_team(scenario: Scenario, cmd: Formation) -> None:
-    n = scenario.n_robots
-    if cmd.failure is not None and cmd.failure.robot > n:
-        raise InputError(
-            f"command.failure.robot = {cmd.failure.robot}, but the team has {n} robot(s)"
+def substeps(stiffness_n_m: float, damping_n_s_m: float, dt_s: float) -> int:
+    """Sub-steps of a ``dt_s`` step that keep the held-force point-mass step stable.
+
+    The exact step of eq. 5 under a force held over a step ``h`` (zero-order hold),
+    applied to a restoring force of stiffness ``kappa``, is stable for ``kappa`` below
+    ``c (1 - e) / (tau (1 - e) - e h)`` (``e = exp(-h / tau)``, ``tau = M / c``; the
+    determinant of its 2 x 2 transition matrix below 1), which is ``2 c / h`` to first
+    order: 400 N/m for the deliverable's ``c = B + k_d = 2 N s/m`` and ``h = 10 ms``.
+    Dividing the step into ``n = ceil(kappa h / c)`` keeps ``kappa`` below half of it.
+
+    Parameters
+    ----------
+    stiffness_n_m : float
+        A bound on the force's stiffness [N/m]
+        (:func:`firefleet.control.formation.stiffness_bound`).
+    damping_n_s_m : float
+        c = B + k_d [N s/m].
+    dt_s : float
+        The step [s].
+
+    Returns
+    -------
+    int
+        n >= 1.
+
+    Raises
+    ------
+    FormationDivergedError
+        If the stiffness is not finite or needs more than :data:`MAX_SUBSTEPS`.
+
+    Examples
+    --------
+    >>> substeps(18.0, 2.0, 0.01), substeps(200.0, 2.0, 0.01), substeps(1000.0, 2.0, 0.01)
+    (1, 1, 5)
+    """
+    need = stiffness_n_m * dt_s / damping_n_s_m
+    if not need <= MAX_SUBSTEPS:  # also NaN
+        raise FormationDivergedError(
+            f"the formation force's stiffness reached {stiffness_n_m:.3g} N/m: a "
+            f"{dt_s} s step would need more than {MAX_SUBSTEPS:,} sub-steps to stay "
+            "stable (robots too close, or attraction_gain * alpha_m^2 too large)"
         )
-    if cmd.formed_by_s > scenario.duration_s:
-        raise InputError(
-            f"command.formed_by_s = {cmd.formed_by_s} s is after the end of the run "
-            f"({scenario.duration_s} s)"
-        )
+    return max(1, math.ceil(need))
 
 
 def simulate_formation(
@@ -218,12 +292,23 @@ def simulate_formation(
     SimResult
         ``pose`` (T, N, 3) (a point mass's heading is its direction of motion), wheel
         arrays (T, N, 2) for diff-drive robots and (T, N, 0) for point masses, and in
-        ``extra``: ``leader_xy`` (T, 2) [m], ``formation_xy_m`` (T, N, 2) (the points
-        the law moves: the robot itself, or its look-ahead point) and ``robot_active``
-        (T, N) (1 while in the team, 0 after a failure).
+        ``extra``: ``leader_xy_m`` (T, 2) [m], ``formation_xy_m`` (T, N, 2) (the points
+        the law moves: the robot itself, or its look-ahead point), ``robot_active``
+        (T, N) (1 while in the team, 0 after a failure) and ``substeps`` (T,) (the
+        sub-steps the step from that sample took, :func:`substeps`; 1 for diff-drive
+        robots).
+
+    Raises
+    ------
+    InputError
+        For a team that does not fit the command (see ``Formation.check_team``).
+    FormationDivergedError
+        If a robot ends farther than :data:`DIVERGENCE_FACTOR` times the formation's
+        size from the leader, or the force is not finite or too stiff for
+        :data:`MAX_SUBSTEPS`: nothing is returned.
     """
     cmd = _command(scenario)
-    _check_team(scenario, cmd)
+    cmd.check_team(scenario.n_robots, scenario.duration_s)
     rng = np.random.default_rng(scenario.seed)
     pose = start_positions(scenario, rng)
     n, dt, n_steps = scenario.n_robots, scenario.dt_s, scenario.n_steps
@@ -244,13 +329,24 @@ def simulate_formation(
         fail_step = math.ceil(cmd.failure.time_s / dt - 1e-9)
     diff_drive = cmd.robot_model == "diff-drive"
     look = cmd.look_ahead_m if diff_drive else 0.0
-    body = cmd.robot_radius_m + look
+    body = cmd.body_radius_m
+    start_far = float(np.sqrt(((pose[:, :2] - leader[0]) ** 2).sum(axis=1)).max())
+    far_m = DIVERGENCE_FACTOR * (cmd.alpha_m + start_far + body)
+
+    def contact_reach(n_team: int) -> float:
+        # the regular polygon's bodies are side - 2 R apart: a contact range beyond that
+        # would push the robots off the circle at the polygon itself
+        if n_team < 2:
+            return cmd.contact_range_m
+        side = 2.0 * cmd.alpha_m * math.sin(math.pi / n_team)
+        return min(cmd.contact_range_m, max(side - 2.0 * body, 1e-3))
 
     n_rec = rec_steps.size
     n_wheels = 2 if diff_drive else 0
     rec_pose = np.empty((n_rec, n, 3))
     rec_point = np.empty((n_rec, n, 2))
     rec_active = np.empty((n_rec, n))
+    rec_substeps = np.empty(n_rec)
     wheels = {
         k: np.empty((n_rec, n, n_wheels))
         for k in ("speed", "measured", "ref", "current", "voltage", "load")
@@ -270,20 +366,61 @@ def simulate_formation(
     w_max = cmd.max_speed_m_s / scenario.robot.wheel_radius_m
     zero_load = np.zeros((n, 2))
 
-    row = 0
-    for k in range(n_steps + 1):
-        active = ~failed if k >= fail_step else np.ones(n, dtype=bool)
-        heading = pose[:, 2]
-        point = pose[:, :2] + look * np.stack([np.cos(heading), np.sin(heading)], axis=1)
-        force = formation_force(
+    # the regular law's contact pairs: a Verlet list, rebuilt when a robot moved _SKIN_M / 2
+    built_at: list[FloatArray] = []
+    built_pairs: list[NDArray[np.intp]] = []
+
+    def candidates(point: FloatArray, reach: float) -> NDArray[np.intp] | None:
+        if cmd.law != "regular":
+            return None
+        if built_at:
+            moved = point - built_at[0]
+            if float((moved * moved).sum(axis=1).max()) < (0.5 * _SKIN_M) ** 2:
+                return built_pairs[0]
+        built_at[:] = [point.copy()]
+        built_pairs[:] = [contact_pairs(point, 2.0 * body + reach + _SKIN_M)]
+        return built_pairs[0]
+
+    def law(point: FloatArray, centre: FloatArray, active: BoolArray) -> tuple[FloatArray, float]:
+        reach = contact_reach(int(active.sum()))
+        force, stiff = formation_force_and_stiffness(
             point,
-            leader[k],
+            centre,
             params,
             law=cmd.law,
             active=active,
             obstacles=obstacles,
             body_radius_m=body,
+            contact_range_m=reach,
+            pairs=candidates(point, reach),
         )
+        if not np.isfinite(force).all():
+            raise FormationDivergedError(
+                f"the formation force is not finite at t = {k * dt:.3f} s: the run "
+                "diverged (a smaller dt_s or smaller gains)"
+            )
+        return force, stiff
+
+    row = 0
+    all_in = np.ones(n, dtype=bool)
+    for k in range(n_steps + 1):
+        active = ~failed if k >= fail_step else all_in
+        heading = pose[:, 2]
+        if diff_drive:
+            point = pose[:, :2] + look * np.stack([np.cos(heading), np.sin(heading)], axis=1)
+        else:
+            point = state[:, :2]
+        gone = point - leader[k]
+        far2 = float((gone * gone).sum(axis=1).max())
+        if not far2 <= far_m * far_m:  # also NaN
+            far = math.sqrt(far2)
+            raise FormationDivergedError(
+                f"the formation diverged at t = {k * dt:.3f} s: a robot is {far:.3g} m from "
+                f"the leader, more than {DIVERGENCE_FACTOR:g} x (alpha_m + its farthest "
+                f"start + a body radius) = {far_m:.3g} m"
+            )
+        force, stiff = law(point, leader[k], active)
+        n_sub = 1
         if diff_drive:
             u = leader_v[k] + force / damping
             speed_u = np.sqrt((u * u).sum(axis=1))
@@ -299,11 +436,12 @@ def simulate_formation(
             assert drive is not None
             drive, voltage = speed_control(drive, ref, stack)
         else:
-            force[active] += damping * leader_v[k] + cmd.mass_kg * leader_a[k]
+            n_sub = substeps(stiff, damping, dt)
         if row < n_rec and rec_steps[row] == k:
             rec_pose[row] = pose
             rec_point[row] = point
             rec_active[row] = active
+            rec_substeps[row] = n_sub
             if diff_drive:
                 assert drive is not None
                 for key, arr in (
@@ -323,11 +461,17 @@ def simulate_formation(
             drive = drive_step(drive, voltage, stack, load_torque_n_m=zero_load)
             pose = drive.pose
         else:
-            new = mass_damper_step(state, force, dt, md)
-            new[~active] = np.concatenate(
-                [state[~active, :2], np.zeros((int((~active).sum()), 2))], axis=1
-            )
-            state = new
+            feed = damping * leader_v[k] + cmd.mass_kg * leader_a[k]
+            held = state[~active] if active is not all_in else None
+            h = dt / n_sub
+            for j in range(n_sub):
+                if j > 0:  # the force at the sub-step, the leader moved on linearly
+                    centre = leader[k] + (j / n_sub) * (leader[k + 1] - leader[k])
+                    force, _ = law(state[:, :2], centre, active)
+                force[active] += feed
+                state = mass_damper_step(state, force, h, md)
+            if held is not None:  # a failed point mass is held where it stopped
+                state[~active] = np.concatenate([held[:, :2], np.zeros((held.shape[0], 2))], axis=1)
             vx, vy = state[:, 2], state[:, 3]
             moving = vx * vx + vy * vy > 1e-12
             pose = np.column_stack([state[:, :2], np.where(moving, np.arctan2(vy, vx), pose[:, 2])])
@@ -347,9 +491,10 @@ def simulate_formation(
         voltage_v=wheels["voltage"],
         load_torque_n_m=wheels["load"],
         extra={
-            "leader_xy": leader[rec_steps],
+            "leader_xy_m": leader[rec_steps],
             "formation_xy_m": rec_point,
             "robot_active": rec_active,
+            "substeps": rec_substeps,
         },
     )
 
@@ -416,7 +561,7 @@ def formation_metrics(result: SimResult) -> dict[str, float | list[float]]:
     cmd = _command(result.scenario)
     t = result.t
     points = np.asarray(result.extra["formation_xy_m"])
-    leader = np.asarray(result.extra["leader_xy"])
+    leader = np.asarray(result.extra["leader_xy_m"])
     active = np.asarray(result.extra["robot_active"]) > 0.5
     r = np.sqrt(((points - leader[:, None, :]) ** 2).sum(axis=2))
     err = np.where(active, np.abs(r - cmd.alpha_m), 0.0)

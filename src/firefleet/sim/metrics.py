@@ -9,15 +9,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from firefleet.errors import InputError, as_float_array
-from firefleet.scenarios.schema import (
-    Claim,
-    Formation,
-    PathFollowing,
-    VoltageStep,
-    WheelSpeedStep,
-)
-from firefleet.sim.cooperative import path_following_metrics
-from firefleet.sim.formation import formation_metrics
+from firefleet.scenarios.schema import Claim
+from firefleet.sim.registry import Metrics, task_kind
 from firefleet.sim.result import SimResult
 
 __all__ = [
@@ -28,10 +21,6 @@ __all__ = [
     "settling_time",
     "step_response_info",
 ]
-
-
-Metrics = dict[str, float | list[float]]
-"""Named numbers of a run: a float, or one float per robot (a list, robot 1 first)."""
 
 
 def _crossing(t: NDArray[np.float64], y: NDArray[np.float64], i: int, level: float) -> float:
@@ -138,75 +127,12 @@ def step_response_info(
 
 
 def compute_metrics(result: SimResult) -> Metrics:
-    """The scenario's metrics from a run, by the kind of its command.
+    """The scenario's metrics from a run: those its task kind declares.
 
-    The names each kind produces are ``firefleet.scenarios.schema.METRICS[kind]``.
+    The names are ``result.scenario.metric_names``
+    (:attr:`firefleet.sim.registry.TaskKind.metric_names`).
     """
-    cmd = result.scenario.command
-    if isinstance(cmd, VoltageStep | WheelSpeedStep):
-        return dict(_motor_metrics(result))
-    if isinstance(cmd, PathFollowing):
-        return path_following_metrics(result)
-    if isinstance(cmd, Formation):
-        return formation_metrics(result)
-    raise InputError(f"no metrics for a {cmd.kind} scenario")
-
-
-def _motor_metrics(result: SimResult) -> dict[str, float]:
-    """Metrics of a motor run (worst case over every wheel of the team).
-
-    ``voltage-step``: ``steady_speed_rad_s`` and ``steady_current_a`` (mean over the last
-    second, averaged over the wheels), ``peak_current_a``, ``time_constant_s`` (time to
-    63.2 % of the steady speed).
-
-    ``wheel-speed-step``: ``rise_time_s``, ``settling_time_s`` and ``overshoot_pct`` of
-    the true wheel speed before the load step; ``steady_state_error_rad_s`` (distance of
-    the mean speed over the second before the load step, or the run's end, from the
-    reference); ``disturbance_recovery_s`` (from the load step until back inside the 2 %
-    band for good; 0 without a load step); ``peak_current_a``; ``max_voltage_v``.
-    """
-    scn = result.scenario
-    t = result.t
-    w = result.wheel_speed_rad_s.reshape(t.size, -1)  # (T, 2N)
-    current = result.current_a.reshape(t.size, -1)
-    cmd = scn.command
-    out: dict[str, float] = {"peak_current_a": float(np.abs(current).max())}
-    if isinstance(cmd, VoltageStep):
-        last = t >= t[-1] - 1.0 + 1e-9
-        steady = float(w[last].mean())
-        out["steady_speed_rad_s"] = steady
-        out["steady_current_a"] = float(current[last].mean())
-        after = t >= cmd.start_s - 1e-12
-        taus = [
-            _crossing(
-                t[after], w[after, j], int(np.argmax(w[after, j] >= 0.632 * steady)), 0.632 * steady
-            )
-            - cmd.start_s
-            for j in range(w.shape[1])
-        ]
-        out["time_constant_s"] = float(max(taus))
-        return out
-    assert isinstance(cmd, WheelSpeedStep)
-    load = scn.load
-    has_load = load.torque_n_m != 0 and load.start_s < t[-1]
-    end = load.start_s if has_load else t[-1] + 1e-9
-    pre = (t >= cmd.start_s - 1e-12) & (t < end)
-    infos = [
-        step_response_info(t[pre], w[pre, j], cmd.speed_rad_s, t0_s=cmd.start_s)
-        for j in range(w.shape[1])
-    ]
-    for key in ("rise_time_s", "settling_time_s", "overshoot_pct"):
-        out[key] = float(max(info[key] for info in infos))
-    window = pre & (t >= end - 1.0)
-    out["steady_state_error_rad_s"] = float(np.abs(w[window].mean(axis=0) - cmd.speed_rad_s).max())
-    if has_load:
-        out["disturbance_recovery_s"] = float(
-            max(recovery_time(t, w[:, j], cmd.speed_rad_s, load.start_s) for j in range(w.shape[1]))
-        )
-    else:
-        out["disturbance_recovery_s"] = 0.0
-    out["max_voltage_v"] = float(np.abs(result.voltage_v).max())
-    return out
+    return task_kind(result.scenario.command.kind).metrics(result)
 
 
 def metrics_document(

@@ -1,11 +1,17 @@
 """A landmark world and a simulated drive for localisation and SLAM (seed section 2.7.3).
 
 One robot of the foundation's stack drives a closed loop (a rounded rectangle, 100 m by
-default) among heat-source landmarks. Every control period (10 ms):
+default) among heat-source landmarks, on the world loop (:func:`firefleet.sim.loop.
+run_staged`). Every control period (10 ms): a ground-truth pose sensor
+(:class:`~firefleet.sim.loop.TruePose`: the drive makes a data set, so it steers on the
+true pose), odometry (dead reckoning of the encoder counts), the steering law (pure
+pursuit) -> ``models.kinematics.body_to_wheels`` -> the wheel stack of
+:mod:`firefleet.sim.drive` (``control.pid.pid_step -> models.motor.motor_step ->
+models.encoder.encoder_step -> models.kinematics.diff_drive_step``).
 
-``steering law (pure pursuit) -> models.kinematics.body_to_wheels -> sim.drive`` (the
-wheel stack: ``control.pid.pid_step -> models.motor.motor_step -> models.encoder.
-encoder_step -> models.kinematics.diff_drive_step``, and the dead reckoning).
+The camera's observations are drawn after the drive, from the recorded true poses (the
+random stream: landmarks, encoder phases, the wheels' slip step by step, then the
+observations frame by frame).
 
 The true robot is not the one its odometry believes in: its wheels' effective radii
 differ slightly from the nominal one and from each other, its axle is slightly longer,
@@ -50,12 +56,15 @@ from firefleet.estimation.particle_filter import (
 from firefleet.models.encoder import EncoderParams
 from firefleet.models.kinematics import RobotGeometry, body_to_wheels, wrap_angle
 from firefleet.models.motor import MotorParams
-from firefleet.sim.drive import (
-    discretise_drive,
-    drive_init,
-    drive_step,
-    encoder_phase,
-    speed_control,
+from firefleet.sim.drive import discretise_drive, drive_init, encoder_phase
+from firefleet.sim.loop import (
+    DecideInputs,
+    Odometry,
+    Stages,
+    StaticWorld,
+    TruePose,
+    WheelCommand,
+    run_staged,
 )
 
 __all__ = [
@@ -311,6 +320,33 @@ def _pure_pursuit(
     return 2.0 * math.sin(alpha) / math.sqrt(ld2), near
 
 
+@dataclass(frozen=True, eq=False)
+class _Pursuit:
+    """The steering law's constants: the loop (K, 2), its look-ahead and search window
+    (in path points), the speed [m/s] and the nominal geometry."""
+
+    path: FloatArray
+    lookahead_pts: int
+    window: int
+    speed_m_s: float
+    geometry: RobotGeometry
+
+
+def _pursuit_decide(
+    near: int, inputs: DecideInputs, params: _Pursuit, dt_s: float
+) -> tuple[int, WheelCommand]:
+    """Pure pursuit on the true pose (``readings["pose"]``) at constant speed; records the
+    odometry. The state is the index of the path point nearest the robot."""
+    curvature, near = _pure_pursuit(
+        inputs.readings["pose"][0], params.path, near, params.lookahead_pts, params.window
+    )
+    v = params.speed_m_s
+    ref = body_to_wheels(np.array([v]), np.array([v * curvature]), params.geometry)
+    odometry = inputs.pose_estimate
+    assert odometry is not None  # the Odometry stage
+    return near, WheelCommand(reference_rad_s=ref, series={"odometry_pose": odometry})
+
+
 def simulate_drive(
     rng: np.random.Generator,
     *,
@@ -355,31 +391,27 @@ def simulate_drive(
     )
     # an ideal encoder draws nothing here (the log of a seed stays the same)
     phase = encoder_phase(prm.encoder, 1, rng) if prm.encoder.counts_per_rev else np.zeros((1, 2))
-    drive = drive_init(np.zeros((1, 3)), phase, stack, odometry=True)
-    assert drive.odometry is not None
-    near = 0
-    frames_t: list[float] = [0.0]
-    frames_truth: list[FloatArray] = [drive.pose[0].copy()]
-    frames_odo: list[FloatArray] = [drive.odometry[0].copy()]
-    for step in range(1, n_steps + 1):
-        curvature, near = _pure_pursuit(drive.pose[0], path, near, look, window)
-        v = prm.speed_m_s
-        ref = body_to_wheels(np.array([v]), np.array([v * curvature]), nominal)
-        drive, voltage = speed_control(drive, ref, stack)
-        drive = drive_step(drive, voltage, stack, rng=rng)  # draws the wheels' slip
-        if step % sensor.frame_steps == 0:
-            frames_t.append(step * prm.dt_s)
-            assert drive.odometry is not None  # drive_init(..., odometry=True)
-            frames_truth.append(drive.pose[0].copy())
-            frames_odo.append(drive.odometry[0].copy())
-        if progress is not None and step % 500 == 0:
-            progress(step, n_steps)
-    truth = np.array(frames_truth)
-    odo_pose = np.array(frames_odo)
-    t = np.array(frames_t)
+    drive = drive_init(np.zeros((1, 3)), phase, stack)
+    stages = Stages(world=StaticWorld(), sensors=TruePose(), estimation=Odometry())
+    pursuit = _Pursuit(
+        path=path, lookahead_pts=look, window=window, speed_m_s=prm.speed_m_s, geometry=nominal
+    )
+    rec = run_staged(
+        drive,
+        stack,
+        stages,
+        _pursuit_decide,
+        0,
+        pursuit,
+        np.arange(0, n_steps + 1, sensor.frame_steps),
+        n_steps,
+        progress=progress,
+        rng=rng,  # draws the wheels' slip, step by step
+    )
+    truth = rec.pose[:, 0].copy()
+    odo_pose = rec.series["odometry_pose"][:, 0].copy()
+    t = rec.t_s
     log = _record(truth, odo_pose, t, lms, prm, rng)
-    if progress is not None:
-        progress(n_steps, n_steps)
     return DriveResult(log=log, landmarks=lms, t_s=t, truth=truth, odometry_pose=odo_pose)
 
 

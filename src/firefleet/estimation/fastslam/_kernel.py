@@ -1,18 +1,22 @@
-"""FastSLAM's per-step update with given association as compiled (numba) loops.
+"""FastSLAM's per-particle updates as compiled (numba) loops: the one definition of each.
 
-:func:`firefleet.estimation.fastslam.fastslam_step` is vectorised over particles, but with
-given association a step loops over its few observations (Victoria Park: 0 to 5, the
-PythonRobotics scenario: 8), and each NumPy call on a (P, 2, 2) stack pays ~1-5 us of
-overhead for ~0.1 us of arithmetic per particle: about 30 calls per observation. These
-kernels do the same arithmetic per particle and observation in one compiled call, with
-no allocation in the loops (2 x 2 and 3 x 3 matrices in scalars). The random draws stay
-in NumPy (the caller passes them in), so a seed gives the same run as before.
+``_landmark_update`` (the landmark EKF update and its weight) and ``_init_landmark``
+(a landmark from its first observation) are written once here and used by both
+associations: given association through :func:`update_known_v1` and
+:func:`update_known_v2`, unknown association through :func:`update_landmarks` (the
+association itself, with its gates, stays NumPy over particles). A step loops over its
+few observations (Victoria Park: 0 to 5, the PythonRobotics scenario: 8), and each NumPy
+call on a (P, 2, 2) stack pays ~1-5 us of overhead for ~0.1 us of arithmetic per
+particle: these kernels do the arithmetic per particle and observation in one compiled
+call, with no allocation in the loops (2 x 2 and 3 x 3 matrices in scalars). The random
+draws stay in NumPy (the caller passes them in), so a seed gives the same run as before.
+``tests/estimation/test_fastslam_kernel.py`` checks them against a NumPy reference.
 
-The equations are those of :mod:`firefleet.estimation.fastslam` (Thrun et al. 2005,
-Tables 13.1 and 13.3): landmark initialisation ``m = x + r (cos, sin)(theta + phi)``,
-``S = H_m^-1 R H_m^-T``; EKF update ``Q = H_m S H_m^T + R``, ``K = S H_m^T Q^-1``; weight
-``N(nu; 0, Q)`` (1.0) or ``N(nu; 0, H_x Sigma_x H_x^T + Q)`` (2.0) with the proposal's
-information update ``Sigma_x' = (H_x^T Q^-1 H_x + Sigma_x^-1)^-1``.
+Equations (Thrun et al. 2005, Tables 13.1 and 13.3): landmark initialisation
+``m = x + r (cos, sin)(theta + phi)``, ``S = H_m^-1 R H_m^-T``; EKF update
+``Q = H_m S H_m^T + R``, ``K = S H_m^T Q^-1``; weight ``N(nu; 0, Q)`` (1.0) or
+``N(nu; 0, H_x Sigma_x H_x^T + Q)`` (2.0) with the proposal's information update
+``Sigma_x' = (H_x^T Q^-1 H_x + Sigma_x^-1)^-1``.
 
 All functions here are compiled together (numba's cache does not track edits to jitted
 functions of other modules).
@@ -121,6 +125,40 @@ def _landmark_update(
     s[0, 0], s[1, 1] = n00, n11
     s[0, 1] = s[1, 0] = 0.5 * (n01 + n10)
     return float(-0.5 * m2 - 0.5 * math.log(qd) - _LOG_2PI)
+
+
+@numba.njit(cache=True)
+def update_landmarks(
+    poses: FloatArray,
+    mu: FloatArray,
+    sigma: FloatArray,
+    slots: IntArray,
+    new: BoolArray,
+    z: FloatArray,
+    r: FloatArray,
+) -> None:  # pragma: no cover (compiled)
+    """One observation's map update in every particle (unknown association), in place.
+
+    Particle i initialises slot ``slots[i]`` from the observation when ``new[i]``, else
+    makes the EKF update of the landmark there (:func:`_landmark_update`, the one
+    definition both associations use); ``slots[i] < 0`` skips the particle.
+
+    Parameters
+    ----------
+    poses : (P, 3) sampled poses; mu : (P, C, 2); sigma : (P, C, 2, 2)
+    slots : (P,) the slot of the observation in each particle, -1 to skip
+    new : (P,) whether it is a new landmark in that particle
+    z : (2,) range [m], bearing [rad]; r : (2, 2) its covariance
+    """
+    for i in range(poses.shape[0]):
+        j = slots[i]
+        if j < 0:
+            continue
+        px, py, pth = poses[i, 0], poses[i, 1], poses[i, 2]
+        if new[i]:
+            _init_landmark(px, py, pth, z[0], z[1], r, mu[i, j], sigma[i, j])
+        else:
+            _landmark_update(px, py, pth, z[0], z[1], r, mu[i, j], sigma[i, j])
 
 
 @numba.njit(cache=True)

@@ -1,4 +1,4 @@
-"""The cooperative path-following run: the whole hierarchy, compiled."""
+"""The path-following kind: the whole hierarchy on the world loop, compiled."""
 
 from __future__ import annotations
 
@@ -93,7 +93,8 @@ def test_path_count_must_match_the_team() -> None:
 
 
 def test_parallel_kernel_equals_serial(monkeypatch: pytest.MonkeyPatch) -> None:
-    from firefleet.sim import cooperative
+    from firefleet.sim import _kernels
+    from firefleet.sim.kinds import path_following
 
     base = load_scenario("coop-different-paths")
     cmd = base.command
@@ -104,9 +105,10 @@ def test_parallel_kernel_equals_serial(monkeypatch: pytest.MonkeyPatch) -> None:
         command=dataclasses.replace(cmd, paths=cmd.paths * 22, trajectory_s=10.0),
         duration_s=10.0,
     )
-    assert big.n_robots >= cooperative.PARALLEL_MIN_ROBOTS
+    assert big.n_robots >= _kernels.PARALLEL_MIN_ROBOTS_ONE_PIECE
     parallel = simulate(big).arrays()
-    monkeypatch.setattr(cooperative, "PARALLEL_MIN_ROBOTS", 10**9)
+    monkeypatch.setattr(path_following, "PARALLEL_MIN_ROBOTS", 10**9)
+    monkeypatch.setattr(path_following, "PARALLEL_MIN_ROBOTS_ONE_PIECE", 10**9)
     serial = simulate(big).arrays()
     for key in parallel:
         np.testing.assert_array_equal(parallel[key], serial[key], err_msg=key)

@@ -1,0 +1,886 @@
+"""Compiled (numba) team kernels, built only from the compiled scalar steps of the models.
+
+Two fused loops run a whole team for a range of steps, each robot's state held in
+registers while it runs the range (robots are independent: a team equals its robots run
+one by one, and a parallel run equals a serial one bit for bit):
+
+:func:`path_following_chunk`
+    The cooperative path-following hierarchy (deliverable section 2.6, Figure 10): the
+    trajectory's desired point, the controller's inputs (eqs. 9-11) on the odometry
+    pose, the two fuzzy systems (:func:`firefleet.control.fuzzy_kernel.eval_one`), the
+    wheel-speed PIDs, the motors, the true pose, the encoders and dead reckoning.
+:func:`motor_team_chunk`
+    The wheel stack alone under a voltage or wheel-speed step and a load step (the
+    ``voltage-step`` and ``wheel-speed-step`` runs): :func:`firefleet.sim.drive.speed_control`
+    and :func:`firefleet.sim.drive.drive_step` (without slip), fused.
+
+The physics is not written here: each step calls the one compiled definition beside its
+NumPy form (:func:`~firefleet.control.pid.pid_step_one`,
+:func:`~firefleet.models.motor.motor_step_one`,
+:func:`~firefleet.models.encoder.encoder_step_one`,
+:func:`~firefleet.models.kinematics.diff_drive_step_one`,
+:func:`~firefleet.models.kinematics.wrap_angle_one`); tests show each equals its NumPy
+reference and each kernel equals the NumPy composition.
+
+Numba's on-disk cache keys a compiled function on its own file only: after editing one
+of those scalar steps, remove the caches (``make clean``) so these kernels compile again.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from firefleet.control.fuzzy_kernel import eval_one
+from firefleet.control.pid import pid_step_one
+from firefleet.models.encoder import encoder_init, encoder_step_one
+from firefleet.models.kinematics import diff_drive_step_one, wrap_angle_one
+from firefleet.models.motor import motor_step_one
+from firefleet.sim.drive import DriveStack
+
+__all__ = [
+    "MOTOR_RECORD",
+    "PARALLEL_MIN_ROBOTS",
+    "PARALLEL_MIN_ROBOTS_ONE_PIECE",
+    "motor_team_chunk",
+    "motor_team_chunk_parallel",
+    "path_following_chunk",
+    "path_following_chunk_parallel",
+    "run_motor_team",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+PARALLEL_MIN_ROBOTS = 64
+"""Teams at least this large run their robots on every core (they are independent, so
+the result is the same bit for bit); smaller ones on one, where starting the threads for
+each piece of a run costs more than they bring (on a busy machine a sleeping thread can
+take milliseconds to wake)."""
+
+PARALLEL_MIN_ROBOTS_ONE_PIECE = 64
+"""The same for a path-following run in one piece (no progress callback), where the
+threads start once for the whole run. 2 would run coop-different-paths (3 robots, 80 s)
+1.15 to 1.4 times faster in wall time on two cores, but then every small team starts
+numba's GNU OpenMP threads, and a process that has started them and then forks (a
+``multiprocessing`` pool with the default "fork" start) ends its children when they run
+a parallel kernel ("fork() called from a process already using GNU OpenMP"). Kept at the
+team size where the threads were already in use before."""
+
+
+@numba.njit(cache=True)
+def _path_following_robot(
+    i: int,
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    points: FloatArray,
+    spacing: FloatArray,
+    period: float,
+    pose: FloatArray,
+    odom: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    load: FloatArray,
+    cpr: float,
+    done: FloatArray,
+    m_kind: IntArray,
+    m_par: FloatArray,
+    m_in: IntArray,
+    m_range: FloatArray,
+    m_rmf: IntArray,
+    m_rnot: NDArray[np.bool_],
+    m_rw: FloatArray,
+    m_ror: NDArray[np.bool_],
+    m_rout: IntArray,
+    m_coef: FloatArray,
+    m_mid: FloatArray,
+    m_flags: IntArray,
+    l_kind: IntArray,
+    l_par: FloatArray,
+    l_in: IntArray,
+    l_range: FloatArray,
+    l_rmf: IntArray,
+    l_rnot: NDArray[np.bool_],
+    l_rw: FloatArray,
+    l_ror: NDArray[np.bool_],
+    l_rout: IntArray,
+    l_coef: FloatArray,
+    l_mid: FloatArray,
+    l_flags: IntArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    odom_rec: FloatArray,
+    wheel_rec: FloatArray,
+    ctl_rec: FloatArray,
+    desired_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """Robot ``i`` of :func:`path_following_chunk` through its steps ``k0 <= k < k1``."""
+    pieces = points.shape[1] - 1
+    r, axle = geom[0], geom[1]
+    coef = (
+        motor[0],
+        motor[1],
+        motor[2],
+        motor[3],
+        motor[4],
+        motor[5],
+        motor[6],
+        motor[7],
+        motor[8],
+        motor[9],
+        motor[10],
+        motor[11],
+    )
+    gains = (pid[0], pid[1], pid[2], pid[3], pid[4], pid[5], pid[6])
+    per_rad = cpr / (2.0 * math.pi) if cpr > 0 else 0.0
+    window = history.shape[2] - 1
+    count_rad = 2.0 * math.pi / cpr if cpr > 0 else 1.0
+    per_count = count_rad / (window * dt)
+    tau_on, t_load = load[0], load[1] - 1e-9
+    work = np.empty(64 + m_kind.shape[0] + l_kind.shape[0])
+    x_main = np.empty(3)
+    y_main = np.empty(2)
+    x_lam = np.empty(1)
+    y_lam = np.empty(1)
+    x_end, y_end, h_end = points[i, pieces, 0], points[i, pieces, 1], points[i, pieces, 2]
+    cos_end, sin_end = math.cos(h_end), math.sin(h_end)
+    # the robot's state, in registers for the chunk
+    px, py, pth = pose[i, 0], pose[i, 1], pose[i, 2]
+    ox, oy, oth = odom[i, 0], odom[i, 1], odom[i, 2]
+    cur_r, spd_r, ang_r, meas_r = wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3]
+    int_r, der_r, last_r, cnt_r = wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6], wheel[i, 0, 7]
+    cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
+    int_l, der_l, last_l, cnt_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6], wheel[i, 1, 7]
+    stopped = done[i] > 0.0
+    j_trig = -1  # the index whose heading's cos and sin are held
+    cos_d, sin_d = 1.0, 0.0
+    for k in range(k0, k1):
+        t = k * dt
+        j = math.floor(t / period + 1e-9) + 1
+        tau = tau_on if t >= t_load else 0.0
+        row = rec_index[k]
+        # --- high level: the fuzzy controller on the odometry pose (eqs. 9-11)
+        if j <= pieces:
+            xd, yd, hd = points[i, j, 0], points[i, j, 1], points[i, j, 2]
+            if j != j_trig:
+                cos_d, sin_d = math.cos(hd), math.sin(hd)
+                j_trig = j
+        else:  # past the end: on along the end tangent, at the same pace
+            beyond = (j - pieces) * spacing[i]
+            xd = x_end + beyond * cos_end
+            yd = y_end + beyond * sin_end
+            cos_d, sin_d = cos_end, sin_end
+            j_trig = -1
+        dx = xd - ox
+        dy = yd - oy
+        d_rp = math.sqrt(dx * dx + dy * dy)
+        x_err = dx * cos_d + dy * sin_d
+        y_err = -math.sin(oth) * dx + math.cos(oth) * dy
+        alpha = wrap_angle_one(math.atan2(dy, dx) - oth) if d_rp > 0.0 else 0.0
+        x_lam[0] = y_err
+        eval_one(
+            x_lam,
+            l_kind,
+            l_par,
+            l_in,
+            l_range,
+            l_rmf,
+            l_rnot,
+            l_rw,
+            l_ror,
+            l_rout,
+            l_coef,
+            l_mid,
+            l_flags,
+            y_lam,
+            work,
+        )
+        lam_deg = y_lam[0]
+        x_main[0] = d_rp
+        x_main[1] = x_err
+        x_main[2] = min(max(math.degrees(alpha) + lam_deg, -180.0), 180.0)
+        eval_one(
+            x_main,
+            m_kind,
+            m_par,
+            m_in,
+            m_range,
+            m_rmf,
+            m_rnot,
+            m_rw,
+            m_ror,
+            m_rout,
+            m_coef,
+            m_mid,
+            m_flags,
+            y_main,
+            work,
+        )
+        past_end = (x_end - ox) * cos_end + (y_end - oy) * sin_end
+        if j >= pieces and past_end <= 0.0:
+            stopped = True
+        v = 0.0 if stopped else y_main[0]
+        omega = 0.0 if stopped else math.radians(y_main[1])
+        ref_r = (v + 0.5 * axle * omega) / r
+        ref_l = (v - 0.5 * axle * omega) / r
+        # --- low level: the wheel-speed PIDs
+        int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref_r, meas_r, gains, dt)
+        last_r = meas_r
+        int_l, der_l, volt_l = pid_step_one(int_l, der_l, last_l, ref_l, meas_l, gains, dt)
+        last_l = meas_l
+        if row >= 0:
+            pose_rec[row, i, 0] = px
+            pose_rec[row, i, 1] = py
+            pose_rec[row, i, 2] = pth
+            odom_rec[row, i, 0] = ox
+            odom_rec[row, i, 1] = oy
+            odom_rec[row, i, 2] = oth
+            wheel_rec[row, i, 0, 0] = spd_r
+            wheel_rec[row, i, 0, 1] = meas_r
+            wheel_rec[row, i, 0, 2] = ref_r
+            wheel_rec[row, i, 0, 3] = cur_r
+            wheel_rec[row, i, 0, 4] = volt_r
+            wheel_rec[row, i, 0, 5] = tau
+            wheel_rec[row, i, 1, 0] = spd_l
+            wheel_rec[row, i, 1, 1] = meas_l
+            wheel_rec[row, i, 1, 2] = ref_l
+            wheel_rec[row, i, 1, 3] = cur_l
+            wheel_rec[row, i, 1, 4] = volt_l
+            wheel_rec[row, i, 1, 5] = tau
+            ctl_rec[row, i, 0] = v
+            ctl_rec[row, i, 1] = omega
+            ctl_rec[row, i, 2] = d_rp
+            ctl_rec[row, i, 3] = x_err
+            ctl_rec[row, i, 4] = y_err
+            ctl_rec[row, i, 5] = alpha
+            ctl_rec[row, i, 6] = math.radians(lam_deg)
+            ctl_rec[row, i, 7] = j
+            desired_rec[row, i, 0] = xd
+            desired_rec[row, i, 1] = yd
+        if k == n_steps:
+            continue
+        # --- plant: motors (exact ZOH), true pose, encoders, odometry
+        cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau, coef)
+        cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau, coef)
+        ang_r, count_r, meas_r = encoder_step_one(
+            ang_r, dphi_r, history[i, 0, 1], per_rad, per_count
+        )
+        ang_l, count_l, meas_l = encoder_step_one(
+            ang_l, dphi_l, history[i, 1, 1], per_rad, per_count
+        )
+        for h in range(window):
+            history[i, 0, h] = history[i, 0, h + 1]
+            history[i, 1, h] = history[i, 1, h + 1]
+        history[i, 0, window] = count_r
+        history[i, 1, window] = count_l
+        px, py, pth = diff_drive_step_one(px, py, pth, dphi_r, dphi_l, r, axle)
+        ox, oy, oth = diff_drive_step_one(
+            ox, oy, oth, (count_r - cnt_r) * count_rad, (count_l - cnt_l) * count_rad, r, axle
+        )
+        cnt_r, cnt_l = count_r, count_l
+    pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
+    odom[i, 0], odom[i, 1], odom[i, 2] = ox, oy, oth
+    wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
+    wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6], wheel[i, 0, 7] = int_r, der_r, last_r, cnt_r
+    wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
+    wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6], wheel[i, 1, 7] = int_l, der_l, last_l, cnt_l
+    if stopped:
+        done[i] = 1.0
+
+
+# The two fuzzy systems come in as their FisTables fields, flat: passed as NamedTuples
+# the kernel measured 30 % slower, the fields' arrays then reached through the tuple on
+# every access. The serial and the parallel kernel are two functions (not one function
+# compiled twice): numba's cache keys an entry on the function's name and line, not on
+# parallel=True, so one function compiled both ways would load the other's code.
+@numba.njit(cache=True)
+def path_following_chunk(
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    points: FloatArray,
+    spacing: FloatArray,
+    period: float,
+    pose: FloatArray,
+    odom: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    load: FloatArray,
+    cpr: float,
+    done: FloatArray,
+    m_kind: IntArray,
+    m_par: FloatArray,
+    m_in: IntArray,
+    m_range: FloatArray,
+    m_rmf: IntArray,
+    m_rnot: NDArray[np.bool_],
+    m_rw: FloatArray,
+    m_ror: NDArray[np.bool_],
+    m_rout: IntArray,
+    m_coef: FloatArray,
+    m_mid: FloatArray,
+    m_flags: IntArray,
+    l_kind: IntArray,
+    l_par: FloatArray,
+    l_in: IntArray,
+    l_range: FloatArray,
+    l_rmf: IntArray,
+    l_rnot: NDArray[np.bool_],
+    l_rw: FloatArray,
+    l_ror: NDArray[np.bool_],
+    l_rout: IntArray,
+    l_coef: FloatArray,
+    l_mid: FloatArray,
+    l_flags: IntArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    odom_rec: FloatArray,
+    wheel_rec: FloatArray,
+    ctl_rec: FloatArray,
+    desired_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """Steps ``k0 <= k < k1`` of a path-following team, in place.
+
+    Parameters
+    ----------
+    k0, k1 : int
+        The range of steps; step ``n_steps`` only records (no plant step after it).
+    n_steps : int
+        Steps of the whole run.
+    dt : float
+        Control period [s].
+    points : ndarray, shape (N, P + 1, 3)
+        Each robot's desired points x [m], y [m] and the path heading there [rad].
+    spacing : ndarray, shape (N,)
+        Arc length between points [m]: the pace on along the end tangent past the end.
+    period : float
+        Time between desired points [s].
+    pose, odom : ndarray, shape (N, 3)
+        True and dead-reckoned poses (in/out).
+    wheel : ndarray, shape (N, 2, 8)
+        Per wheel: current [A], speed [rad/s], angle [rad], measured speed [rad/s], PID
+        integral [V], filtered derivative [V], last measurement [rad/s], last count
+        (in/out).
+    history : ndarray, shape (N, 2, window + 1)
+        Each encoder's last counts, oldest first (in/out).
+    motor : ndarray, shape (12,)
+        :attr:`~firefleet.models.motor.DiscreteMotor.coefficients`.
+    pid : ndarray, shape (7,)
+        :attr:`~firefleet.control.pid.PidParams.gains`.
+    geom : ndarray, shape (2,)
+        Wheel radius [m], axle length [m].
+    load : ndarray, shape (2,)
+        Load torque [N m] and its start [s].
+    cpr : float
+        Encoder counts per revolution (0: ideal).
+    done : ndarray, shape (N,)
+        1.0 once a robot has reached its path's end (in/out).
+    m_kind ... m_flags, l_kind ... l_flags : arrays
+        The main and the lambda-correction systems' ``FisTables`` fields, in order.
+    rec_index : ndarray of int, shape (n_steps + 1,)
+        Row of each step in the records, -1 where not recorded.
+    pose_rec, odom_rec : ndarray, shape (T, N, 3)
+    wheel_rec : ndarray, shape (T, N, 2, 6)
+        Speed, measured speed, reference, current, voltage, load.
+    ctl_rec : ndarray, shape (T, N, 8)
+        ``sim.kinds.path_following.CONTROL_SERIES``.
+    desired_rec : ndarray, shape (T, N, 2)
+    """
+    for i in range(pose.shape[0]):  # robots are independent
+        _path_following_robot(
+            i,
+            k0,
+            k1,
+            n_steps,
+            dt,
+            points,
+            spacing,
+            period,
+            pose,
+            odom,
+            wheel,
+            history,
+            motor,
+            pid,
+            geom,
+            load,
+            cpr,
+            done,
+            m_kind,
+            m_par,
+            m_in,
+            m_range,
+            m_rmf,
+            m_rnot,
+            m_rw,
+            m_ror,
+            m_rout,
+            m_coef,
+            m_mid,
+            m_flags,
+            l_kind,
+            l_par,
+            l_in,
+            l_range,
+            l_rmf,
+            l_rnot,
+            l_rw,
+            l_ror,
+            l_rout,
+            l_coef,
+            l_mid,
+            l_flags,
+            rec_index,
+            pose_rec,
+            odom_rec,
+            wheel_rec,
+            ctl_rec,
+            desired_rec,
+        )
+
+
+@numba.njit(cache=True, parallel=True)
+def path_following_chunk_parallel(
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    points: FloatArray,
+    spacing: FloatArray,
+    period: float,
+    pose: FloatArray,
+    odom: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    load: FloatArray,
+    cpr: float,
+    done: FloatArray,
+    m_kind: IntArray,
+    m_par: FloatArray,
+    m_in: IntArray,
+    m_range: FloatArray,
+    m_rmf: IntArray,
+    m_rnot: NDArray[np.bool_],
+    m_rw: FloatArray,
+    m_ror: NDArray[np.bool_],
+    m_rout: IntArray,
+    m_coef: FloatArray,
+    m_mid: FloatArray,
+    m_flags: IntArray,
+    l_kind: IntArray,
+    l_par: FloatArray,
+    l_in: IntArray,
+    l_range: FloatArray,
+    l_rmf: IntArray,
+    l_rnot: NDArray[np.bool_],
+    l_rw: FloatArray,
+    l_ror: NDArray[np.bool_],
+    l_rout: IntArray,
+    l_coef: FloatArray,
+    l_mid: FloatArray,
+    l_flags: IntArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    odom_rec: FloatArray,
+    wheel_rec: FloatArray,
+    ctl_rec: FloatArray,
+    desired_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`path_following_chunk` with the robots spread over every core (the same
+    result bit for bit)."""
+    for i in numba.prange(pose.shape[0]):  # robots are independent
+        _path_following_robot(
+            i,
+            k0,
+            k1,
+            n_steps,
+            dt,
+            points,
+            spacing,
+            period,
+            pose,
+            odom,
+            wheel,
+            history,
+            motor,
+            pid,
+            geom,
+            load,
+            cpr,
+            done,
+            m_kind,
+            m_par,
+            m_in,
+            m_range,
+            m_rmf,
+            m_rnot,
+            m_rw,
+            m_ror,
+            m_rout,
+            m_coef,
+            m_mid,
+            m_flags,
+            l_kind,
+            l_par,
+            l_in,
+            l_range,
+            l_rmf,
+            l_rnot,
+            l_rw,
+            l_ror,
+            l_rout,
+            l_coef,
+            l_mid,
+            l_flags,
+            rec_index,
+            pose_rec,
+            odom_rec,
+            wheel_rec,
+            ctl_rec,
+            desired_rec,
+        )
+
+
+MOTOR_RECORD = ("speed", "measured", "ref", "current", "voltage", "load")
+"""Wheel quantities :func:`motor_team_chunk` records, in the last axis of ``wheel_rec``:
+true speed [rad/s], measured speed [rad/s], reference [rad/s] (NaN in open loop),
+current [A], voltage [V], load torque [N m]."""
+
+
+@numba.njit(cache=True)
+def _motor_team_robot(
+    i: int,
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    command: FloatArray,
+    pose: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    encoder: FloatArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    wheel_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """Robot ``i`` of :func:`motor_team_chunk` through its steps ``k0 <= k < k1``."""
+    open_loop = command[0] > 0.0
+    level_on, level_start = command[1], command[2] - 1e-9
+    load_on, load_start = command[3], command[4] - 1e-9
+    coef = (
+        motor[0],
+        motor[1],
+        motor[2],
+        motor[3],
+        motor[4],
+        motor[5],
+        motor[6],
+        motor[7],
+        motor[8],
+        motor[9],
+        motor[10],
+        motor[11],
+    )
+    gains = (pid[0], pid[1], pid[2], pid[3], pid[4], pid[5], pid[6])
+    scale_r, scale_l, radius, axle = geom[0], geom[1], geom[2], geom[3]
+    per_rad, per_count = encoder[0], encoder[1]
+    window = history.shape[2] - 1
+    px, py, pth = pose[i, 0], pose[i, 1], pose[i, 2]
+    cur_r, spd_r, ang_r, meas_r = wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3]
+    int_r, der_r, last_r = wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6]
+    cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
+    int_l, der_l, last_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6]
+    for k in range(k0, k1):
+        t = k * dt
+        tau = load_on if t >= load_start else 0.0
+        level = level_on if t >= level_start else 0.0
+        if open_loop:
+            ref = math.nan
+            volt_r = level
+            volt_l = level
+        else:
+            ref = level
+            int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref, meas_r, gains, dt)
+            last_r = meas_r
+            int_l, der_l, volt_l = pid_step_one(int_l, der_l, last_l, ref, meas_l, gains, dt)
+            last_l = meas_l
+        row = rec_index[k]
+        if row >= 0:
+            pose_rec[row, i, 0] = px
+            pose_rec[row, i, 1] = py
+            pose_rec[row, i, 2] = pth
+            wheel_rec[row, i, 0, 0] = spd_r
+            wheel_rec[row, i, 0, 1] = meas_r
+            wheel_rec[row, i, 0, 2] = ref
+            wheel_rec[row, i, 0, 3] = cur_r
+            wheel_rec[row, i, 0, 4] = volt_r
+            wheel_rec[row, i, 0, 5] = tau
+            wheel_rec[row, i, 1, 0] = spd_l
+            wheel_rec[row, i, 1, 1] = meas_l
+            wheel_rec[row, i, 1, 2] = ref
+            wheel_rec[row, i, 1, 3] = cur_l
+            wheel_rec[row, i, 1, 4] = volt_l
+            wheel_rec[row, i, 1, 5] = tau
+        if k == n_steps:
+            continue
+        cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau, coef)
+        cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau, coef)
+        ang_r, count_r, meas_r = encoder_step_one(
+            ang_r, dphi_r, history[i, 0, 1], per_rad, per_count
+        )
+        ang_l, count_l, meas_l = encoder_step_one(
+            ang_l, dphi_l, history[i, 1, 1], per_rad, per_count
+        )
+        for h in range(window):
+            history[i, 0, h] = history[i, 0, h + 1]
+            history[i, 1, h] = history[i, 1, h + 1]
+        history[i, 0, window] = count_r
+        history[i, 1, window] = count_l
+        px, py, pth = diff_drive_step_one(
+            px, py, pth, dphi_r * scale_r, dphi_l * scale_l, radius, axle
+        )
+    pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
+    wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
+    wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6] = int_r, der_r, last_r
+    wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
+    wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6] = int_l, der_l, last_l
+
+
+@numba.njit(cache=True)
+def motor_team_chunk(
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    command: FloatArray,
+    pose: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    encoder: FloatArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    wheel_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """Steps ``k0 <= k < k1`` of a team's wheel stacks under step commands, in place.
+
+    Each step, as :func:`firefleet.sim.drive.speed_control` then (after recording)
+    :func:`firefleet.sim.drive.drive_step` without slip: PID (closed loop) or the voltage
+    itself (open loop), motors, true pose (true wheel radii and axle), encoders.
+
+    Parameters
+    ----------
+    k0, k1 : int
+        The range of steps; step ``n_steps`` only records.
+    n_steps : int
+        Steps of the whole run.
+    dt : float
+        Control period [s].
+    command : ndarray, shape (5,)
+        Open loop (1.0: the level is a voltage) or closed loop (0.0: a wheel-speed
+        reference); the level [V or rad/s] and its start [s]; the load torque [N m] and
+        its start [s]. Each is on from ``k dt >= start - 1e-9``.
+    pose : ndarray, shape (N, 3)
+        True poses (in/out).
+    wheel : ndarray, shape (N, 2, 7)
+        Per wheel: current [A], speed [rad/s], angle [rad], measured speed [rad/s], PID
+        integral [V], filtered derivative [V], last measurement [rad/s] (in/out).
+    history : ndarray, shape (N, 2, window + 1)
+        Each encoder's last counts, oldest first (in/out).
+    motor : ndarray, shape (12,)
+        :attr:`~firefleet.models.motor.DiscreteMotor.coefficients`.
+    pid : ndarray, shape (7,)
+        :attr:`~firefleet.control.pid.PidParams.gains`.
+    geom : ndarray, shape (4,)
+        True wheel radius over nominal, right and left; wheel radius [m]; true axle [m].
+    encoder : ndarray, shape (2,)
+        :attr:`~firefleet.models.encoder.EncoderParams.counts_per_rad` and
+        :meth:`~firefleet.models.encoder.EncoderParams.speed_per_count`.
+    rec_index : ndarray of int, shape (n_steps + 1,)
+        Row of each step in the records, -1 where not recorded.
+    pose_rec : ndarray, shape (T, N, 3)
+    wheel_rec : ndarray, shape (T, N, 2, 6)
+        :data:`MOTOR_RECORD`.
+    """
+    for i in range(pose.shape[0]):  # robots are independent
+        _motor_team_robot(
+            i,
+            k0,
+            k1,
+            n_steps,
+            dt,
+            command,
+            pose,
+            wheel,
+            history,
+            motor,
+            pid,
+            geom,
+            encoder,
+            rec_index,
+            pose_rec,
+            wheel_rec,
+        )
+
+
+@numba.njit(cache=True, parallel=True)
+def motor_team_chunk_parallel(
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    command: FloatArray,
+    pose: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    encoder: FloatArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    wheel_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`motor_team_chunk` with the robots spread over every core (the same result
+    bit for bit)."""
+    for i in numba.prange(pose.shape[0]):  # robots are independent
+        _motor_team_robot(
+            i,
+            k0,
+            k1,
+            n_steps,
+            dt,
+            command,
+            pose,
+            wheel,
+            history,
+            motor,
+            pid,
+            geom,
+            encoder,
+            rec_index,
+            pose_rec,
+            wheel_rec,
+        )
+
+
+def run_motor_team(
+    stack: DriveStack,
+    pose: FloatArray,
+    encoder_phase_rad: FloatArray,
+    *,
+    open_loop: bool,
+    level: float,
+    level_start_s: float,
+    load_torque_n_m: float,
+    load_start_s: float,
+    n_steps: int,
+    rec_steps: IntArray,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[str, FloatArray]:
+    """Run a team's wheel stacks under a step command and a load step (compiled).
+
+    The same run as :func:`firefleet.sim.drive.drive_init`, then each step
+    :func:`~firefleet.sim.drive.speed_control` (closed loop) and
+    :func:`~firefleet.sim.drive.drive_step` (no slip), recorded before the plant step.
+
+    Parameters
+    ----------
+    stack : DriveStack
+        The wheel stack (its ``slip_variance_m`` is not used: no slip).
+    pose : ndarray, shape (N, 3)
+        Start poses x [m], y [m], theta [rad].
+    encoder_phase_rad : ndarray, shape (N, 2)
+        Each wheel's angle from its encoder's zero [rad].
+    open_loop : bool
+        True: ``level`` is the voltage [V] of every motor; False: the wheel-speed
+        reference [rad/s] of every PID.
+    level, level_start_s : float
+        The step's value and start [s].
+    load_torque_n_m, load_start_s : float
+        The load step on every motor [N m] and its start [s].
+    n_steps : int
+        Steps of the run (``n_steps + 1`` states, the last only recorded).
+    rec_steps : ndarray of int
+        Steps to record, ascending.
+    progress : callable, optional
+        ``progress(done, total)`` about a hundred times; without it the run is one call.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``"pose"`` (T, N, 3), and each of :data:`MOTOR_RECORD` (T, N, 2).
+    """
+    n = pose.shape[0]
+    enc = stack.encoder
+    scale = stack.wheel_radius_scale or (1.0, 1.0)
+    wheel = np.zeros((n, 2, 7))
+    wheel[:, :, 2] = encoder_phase_rad
+    history = np.ascontiguousarray(np.moveaxis(encoder_init(encoder_phase_rad, enc).history, 0, -1))
+    command = np.array(
+        [1.0 if open_loop else 0.0, level, level_start_s, load_torque_n_m, load_start_s]
+    )
+    geom = np.array(
+        [
+            scale[0],
+            scale[1],
+            stack.true_geometry.wheel_radius_m,
+            stack.true_geometry.axle_length_m,
+        ]
+    )
+    encoder = np.array([enc.counts_per_rad, enc.speed_per_count(stack.dt_s)])
+    n_rec = rec_steps.size
+    rec_index = np.full(n_steps + 1, -1, dtype=np.int64)
+    rec_index[rec_steps] = np.arange(n_rec)
+    pose_rec = np.empty((n_rec, n, 3))
+    wheel_rec = np.empty((n_rec, n, 2, len(MOTOR_RECORD)))
+    state = np.array(pose, dtype=np.float64)
+    kernel = motor_team_chunk_parallel if n >= PARALLEL_MIN_ROBOTS else motor_team_chunk
+    chunks = 100 if progress is not None else 1
+    bounds = np.unique(np.linspace(0, n_steps + 1, chunks + 1).astype(np.int64))
+    for k0, k1 in itertools.pairwise(bounds):
+        kernel(
+            int(k0),
+            int(k1),
+            n_steps,
+            stack.dt_s,
+            command,
+            state,
+            wheel,
+            history,
+            np.array(stack.motor.coefficients),
+            np.array(stack.pid.gains),
+            geom,
+            encoder,
+            rec_index,
+            pose_rec,
+            wheel_rec,
+        )
+        if progress is not None:
+            progress(min(int(k1), n_steps), n_steps)
+    out = {"pose": pose_rec}
+    for c, name in enumerate(MOTOR_RECORD):
+        out[name] = wheel_rec[..., c].copy()
+    return out

@@ -1,0 +1,542 @@
+"""The world loop: one fixed-step loop over the whole team, for every task kind.
+
+Each tick ``k`` (time ``t = k dt``), for N robots at once (batch-first arrays, no
+per-robot Python objects), in this order::
+
+    world.step          the world at t: static now; the motors' load torque   (N, 2)
+    sensors.read        readings from the world and the team's true state    by name
+    link.exchange       the messages the team sent last tick, as delivered   by name
+    estimation.step     each robot's pose estimate: odometry (dead reckoning
+                        of the encoder counts) by default                    (N, 3)
+    kind.decide         the task kind's decision for the whole team: wheel
+                        speed references (or voltages) and what to record    (N, 2)
+    drive               the wheel stack (:mod:`firefleet.sim.drive`): the PIDs'
+                        voltages (:func:`speed_control`), then motors,
+                        kinematics, encoders (:func:`drive_step`)            (N, 2), (N, 3)
+    recorder            every k-th tick and the last
+
+The samples a tick records are the state at ``t`` (before the drive step) with what was
+decided at ``t``; the last tick records and stops. Randomness (each wheel's encoder
+phase) comes from one ``numpy.random.Generator`` seeded with the scenario's ``seed``.
+
+A Python loop per tick costs some 100 us of NumPy overhead, far too slow for the long
+runs of small teams. So a kind may bring a *fused* run (:data:`FusedRun`): one compiled
+loop, run in chunks of ticks, that performs the same stage sequence for the default
+stages (static world, no sensors, ideal link, odometry). :func:`run_loop` takes it
+whenever the stages are the defaults; the staged path, each stage a function on arrays
+and the ticks in chunks of Python, is the reference (tests/sim/test_loop.py shows the
+two agree).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from firefleet.scenarios.schema import Scenario
+from firefleet.sim.drive import (
+    DriveStack,
+    DriveState,
+    dead_reckoning,
+    discretise_drive,
+    drive_init,
+    drive_step,
+    encoder_phase,
+    speed_control,
+)
+from firefleet.sim.result import SimResult
+
+__all__ = [
+    "CHUNKS",
+    "DecideInputs",
+    "Decider",
+    "FusedRun",
+    "IdealLink",
+    "NoEstimation",
+    "NoSensors",
+    "Odometry",
+    "ProgressCallback",
+    "Recording",
+    "Stages",
+    "StaticWorld",
+    "TruePose",
+    "WheelCommand",
+    "WorldState",
+    "chunk_bounds",
+    "default_stages",
+    "run_loop",
+    "run_staged",
+]
+
+FloatArray = NDArray[np.float64]
+Messages = Mapping[str, FloatArray]
+
+ProgressCallback = Callable[[int, int], None]
+"""Called as ``progress(steps_done, steps_total)`` about a hundred times a run."""
+
+CHUNKS = 100
+"""The loop runs in this many chunks of ticks (so that a progress bar can move)."""
+
+
+# --- stages ------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class WorldState:
+    """What the world holds at a tick.
+
+    Attributes
+    ----------
+    load_torque_n_m : ndarray, shape (N, 2)
+        Load torque on each wheel motor [N m], held over the tick.
+    """
+
+    load_torque_n_m: FloatArray
+
+
+@dataclass(frozen=True)
+class StaticWorld:
+    """A world that does not change, but for the scenario's load step on the motors.
+
+    Attributes
+    ----------
+    torque_n_m : float
+        Load torque on every wheel motor from ``start_s`` on [N m] (0 before).
+    start_s : float
+        Time of the load step [s].
+    """
+
+    torque_n_m: float = 0.0
+    start_s: float = 0.0
+
+    def init(self, n_robots: int) -> WorldState:
+        """The world before the first tick."""
+        return WorldState(load_torque_n_m=np.zeros((n_robots, 2)))
+
+    def step(self, state: WorldState, t_s: float) -> WorldState:
+        """The world at ``t_s``."""
+        tau = self.torque_n_m if t_s >= self.start_s - 1e-9 else 0.0
+        return WorldState(load_torque_n_m=np.full(state.load_torque_n_m.shape, tau))
+
+
+@dataclass(frozen=True)
+class NoSensors:
+    """No sensor besides the wheel encoders (which belong to the wheel stack)."""
+
+    def read(self, world: WorldState, drive: DriveState) -> Messages:
+        """Readings by name: none."""
+        return {}
+
+
+@dataclass(frozen=True)
+class TruePose:
+    """A ground-truth pose sensor (motion capture): reading ``"pose"`` (N, 3), the true poses."""
+
+    def read(self, world: WorldState, drive: DriveState) -> Messages:
+        """Readings by name: ``{"pose": true poses}``."""
+        return {"pose": drive.pose}
+
+
+class Sensors(Protocol):
+    """The sensors of the loop: readings by name from the world and the true state."""
+
+    def read(self, world: WorldState, drive: DriveState) -> Messages: ...
+
+
+@dataclass(frozen=True)
+class IdealLink:
+    """Every message arrives, unchanged, at the next tick."""
+
+    def exchange(self, sent: Messages) -> Messages:
+        """The messages delivered this tick: all those sent last tick."""
+        return sent
+
+
+@dataclass(frozen=True)
+class OdometryState:
+    """Dead-reckoned poses (N, 3) and the encoder counts (N, 2) they integrate up to."""
+
+    pose: FloatArray
+    counts: FloatArray
+
+
+@dataclass(frozen=True)
+class Odometry:
+    """Pose estimate by dead reckoning: the encoders' count differences, nominal geometry."""
+
+    def init(self, pose: FloatArray, drive: DriveState) -> OdometryState:
+        """The estimate at the start: the true start poses."""
+        return OdometryState(pose=pose.copy(), counts=drive.encoder.history[-1])
+
+    def step(self, state: OdometryState, drive: DriveState, stack: DriveStack) -> OdometryState:
+        """The estimate moved by the counts since its last update."""
+        counts = drive.encoder.history[-1]
+        return OdometryState(
+            pose=dead_reckoning(state.pose, state.counts, counts, stack), counts=counts
+        )
+
+    def pose(self, state: OdometryState) -> FloatArray | None:
+        """The estimated poses (N, 3)."""
+        return state.pose
+
+
+@dataclass(frozen=True)
+class NoEstimation:
+    """No pose estimate (a kind that does not use one, such as the motor runs)."""
+
+    def init(self, pose: FloatArray, drive: DriveState) -> None:
+        """Nothing to hold."""
+
+    def step(self, state: None, drive: DriveState, stack: DriveStack) -> None:
+        """Nothing to update."""
+
+    def pose(self, state: None) -> FloatArray | None:
+        """No estimated pose."""
+        return None
+
+
+class Estimation(Protocol):
+    """A pose estimator of the loop."""
+
+    def init(self, pose: FloatArray, drive: DriveState) -> Any: ...
+
+    def step(self, state: Any, drive: DriveState, stack: DriveStack) -> Any: ...
+
+    def pose(self, state: Any) -> FloatArray | None: ...
+
+
+@dataclass(frozen=True)
+class Stages:
+    """The loop's stages before the decision, by name (see the module notes)."""
+
+    world: StaticWorld
+    sensors: Sensors = field(default_factory=NoSensors)
+    link: IdealLink = field(default_factory=IdealLink)
+    estimation: Estimation = field(default_factory=Odometry)
+
+    def names(self) -> dict[str, str]:
+        """Each stage's class name, as a run records them."""
+        return {
+            "world": type(self.world).__name__,
+            "sensors": type(self.sensors).__name__,
+            "link": type(self.link).__name__,
+            "estimation": type(self.estimation).__name__,
+        }
+
+
+# --- what a task kind brings -------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class DecideInputs:
+    """What a kind's decision sees at a tick.
+
+    Attributes
+    ----------
+    t_s : float
+        Time [s].
+    step : int
+        Tick index k.
+    pose_estimate : ndarray, shape (N, 3), or None
+        The estimation stage's poses (None without an estimator).
+    readings : mapping
+        The sensors' readings by name.
+    inbox : mapping
+        The messages the link delivered, by name.
+    """
+
+    t_s: float
+    step: int
+    pose_estimate: FloatArray | None
+    readings: Messages
+    inbox: Messages
+
+
+@dataclass(frozen=True)
+class WheelCommand:
+    """A decision for the whole team.
+
+    Attributes
+    ----------
+    reference_rad_s : ndarray, shape (N, 2)
+        Wheel speed references [rad/s] for the PIDs (NaN where ``voltage_v`` is given).
+    voltage_v : ndarray, shape (N, 2), or None
+        Motor voltages held over the tick [V], the PIDs skipped (open loop); None: the
+        PIDs give them.
+    series : mapping of str to ndarray
+        The decision's quantities at this tick, by the name the result records them
+        under (``result.extra``), robot axis first.
+    outbox : mapping of str to ndarray
+        Messages to the team, delivered by the link at the next tick.
+    """
+
+    reference_rad_s: FloatArray
+    voltage_v: FloatArray | None = None
+    series: Messages = field(default_factory=dict)
+    outbox: Messages = field(default_factory=dict)
+
+
+DecideStep = Callable[[Any, DecideInputs, Any, float], tuple[Any, WheelCommand]]
+"""``new_state, command = decide(state, inputs, params, dt_s)``."""
+
+
+@dataclass(frozen=True)
+class Decider:
+    """A task kind's decision step on the loop.
+
+    Attributes
+    ----------
+    init : callable
+        ``state, params = init(scenario)``: the decision's memory and its constants.
+    decide : callable
+        ``new_state, command = decide(state, inputs, params, dt_s)``
+        (:class:`DecideInputs`, :class:`WheelCommand`).
+    series : tuple of str
+        Names of the quantities ``decide`` reports each tick, in the order the result
+        lists them.
+    uses_estimate : bool
+        Whether ``decide`` reads ``pose_estimate`` (the default stages then include
+        odometry).
+    """
+
+    init: Callable[[Scenario], tuple[Any, Any]]
+    decide: DecideStep
+    series: tuple[str, ...] = ()
+    uses_estimate: bool = False
+
+
+FusedRun = Callable[[Scenario, FloatArray, NDArray[np.int64], "ProgressCallback | None"], SimResult]
+"""``result = fused(scenario, encoder_phase_rad, rec_steps, progress)``: a kind's compiled
+loop for the default stages, from the encoders' phases (N, 2) [rad] the loop drew, the
+ticks to record, and a progress callback to call between its chunks of ticks."""
+
+
+def default_stages(scenario: Scenario, decider: Decider) -> Stages:
+    """The stages a scenario runs with: static world with its load step, no sensors, an
+    ideal link, and odometry if the kind uses a pose estimate."""
+    return Stages(
+        world=StaticWorld(torque_n_m=scenario.load.torque_n_m, start_s=scenario.load.start_s),
+        estimation=Odometry() if decider.uses_estimate else NoEstimation(),
+    )
+
+
+def chunk_bounds(n_steps: int) -> NDArray[np.int64]:
+    """Tick boundaries of the chunks of a run of ``n_steps`` steps (ticks 0 .. n_steps)."""
+    return np.unique(np.linspace(0, n_steps + 1, CHUNKS + 1).astype(np.int64))
+
+
+def run_loop(
+    scenario: Scenario,
+    decider: Decider,
+    rec_steps: NDArray[np.int64],
+    *,
+    fused: FusedRun | None = None,
+    stages: Stages | None = None,
+    progress: ProgressCallback | None = None,
+) -> SimResult:
+    """Run a scenario on the world loop.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    decider : Decider
+        The task kind's decision.
+    rec_steps : ndarray of int
+        Ticks to record (ascending, the last one ``n_steps`` included).
+    fused : callable, optional
+        The kind's compiled loop (:data:`FusedRun`), taken when ``stages`` is None (the
+        defaults).
+    stages : Stages, optional
+        The stages; None: :func:`default_stages`.
+    progress : callable, optional
+        ``progress(done, total)`` after each chunk.
+
+    Returns
+    -------
+    SimResult
+        The recorded run; ``extra`` holds the decision's series, time first.
+    """
+    rng = np.random.default_rng(scenario.seed)
+    n = scenario.n_robots
+    n_steps = scenario.n_steps
+    phase = encoder_phase(scenario.encoder, n, rng)
+    if fused is not None and stages is None:
+        return fused(scenario, phase, rec_steps, progress)
+
+    stg = stages if stages is not None else default_stages(scenario, decider)
+    stack = discretise_drive(
+        scenario.robot, scenario.motor, scenario.speed_pid, scenario.encoder, scenario.dt_s
+    )
+    drive = drive_init(scenario.initial_poses, phase, stack)
+    state, params = decider.init(scenario)
+    rec = run_staged(
+        drive, stack, stg, decider.decide, state, params, rec_steps, n_steps, progress=progress
+    )
+    return SimResult(
+        scenario=scenario,
+        t=rec.t_s,
+        pose=rec.pose,
+        wheel_speed_rad_s=rec.wheel_speed_rad_s,
+        wheel_speed_measured_rad_s=rec.wheel_speed_measured_rad_s,
+        wheel_speed_ref_rad_s=rec.wheel_speed_ref_rad_s,
+        current_a=rec.current_a,
+        voltage_v=rec.voltage_v,
+        load_torque_n_m=rec.load_torque_n_m,
+        extra={name: rec.series[name] for name in decider.series},
+    )
+
+
+@dataclass(frozen=True)
+class Recording:
+    """The samples of a staged run (T recorded ticks, N robots).
+
+    Attributes
+    ----------
+    t_s : ndarray, shape (T,)
+        Time [s].
+    pose : ndarray, shape (T, N, 3)
+        True poses.
+    wheel_speed_rad_s, wheel_speed_measured_rad_s, wheel_speed_ref_rad_s, current_a, \
+voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
+        The wheel stack's quantities (as :class:`~firefleet.sim.result.SimResult`).
+    series : dict of str to ndarray
+        The decision's series by name, time first.
+    """
+
+    t_s: FloatArray
+    pose: FloatArray
+    wheel_speed_rad_s: FloatArray
+    wheel_speed_measured_rad_s: FloatArray
+    wheel_speed_ref_rad_s: FloatArray
+    current_a: FloatArray
+    voltage_v: FloatArray
+    load_torque_n_m: FloatArray
+    series: dict[str, FloatArray]
+
+
+def run_staged(
+    drive: DriveState,
+    stack: DriveStack,
+    stages: Stages,
+    decide: DecideStep,
+    state: Any,
+    params: Any,
+    rec_steps: NDArray[np.int64],
+    n_steps: int,
+    *,
+    progress: ProgressCallback | None = None,
+    rng: np.random.Generator | None = None,
+) -> Recording:
+    """The staged loop: ticks 0 .. ``n_steps``, each stage a function on arrays.
+
+    Parameters
+    ----------
+    drive : DriveState
+        The team's wheel stacks at the start (N robots).
+    stack : DriveStack
+        Their constants (the control period ``stack.dt_s`` is the tick).
+    stages : Stages
+    decide : callable
+        ``new_state, command = decide(state, inputs, params, dt_s)``.
+    state, params
+        The decision's memory at the start, and its constants.
+    rec_steps : ndarray of int
+        Ticks to record, ascending (at most ``n_steps``).
+    n_steps : int
+        Number of drive steps (the last tick, ``n_steps``, decides and records only).
+    progress : callable, optional
+        ``progress(done, total)`` after each chunk of ticks.
+    rng : numpy.random.Generator, optional
+        Draws the wheels' slip in each drive step (:func:`drive_step`); None: no slip.
+
+    Returns
+    -------
+    Recording
+    """
+    dt = stack.dt_s
+    n = drive.pose.shape[0]
+    world = stages.world.init(n)
+    estimate = stages.estimation.init(drive.pose, drive)
+    sent: Messages = {}
+    rec = _Recorder(rec_steps, n)
+    for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
+        for k in range(int(k0), int(k1)):
+            t = k * dt
+            world = stages.world.step(world, t)
+            readings = stages.sensors.read(world, drive)
+            inbox = stages.link.exchange(sent)
+            if k > 0:  # the encoders have counted since the last tick
+                estimate = stages.estimation.step(estimate, drive, stack)
+            inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
+            state, command = decide(state, inputs, params, dt)
+            sent = command.outbox
+            if command.voltage_v is None:
+                drive, voltage = speed_control(drive, command.reference_rad_s, stack)
+            else:
+                voltage = command.voltage_v
+            rec.record(k, drive, command, voltage, world)
+            if k == n_steps:
+                break
+            drive = drive_step(
+                drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
+            )
+        if progress is not None:
+            progress(min(int(k1), n_steps), n_steps)
+    return rec.recording(dt)
+
+
+class _Recorder:
+    """The samples of a run, written at the ticks to record."""
+
+    def __init__(self, rec_steps: NDArray[np.int64], n_robots: int) -> None:
+        self.rec_steps = rec_steps
+        self.row = 0
+        size = rec_steps.size
+        self.pose = np.empty((size, n_robots, 3))
+        self.wheel = {
+            name: np.empty((size, n_robots, 2))
+            for name in ("speed", "measured", "ref", "current", "voltage", "load")
+        }
+        self.series: dict[str, FloatArray] = {}
+
+    def record(
+        self,
+        k: int,
+        drive: DriveState,
+        command: WheelCommand,
+        voltage: FloatArray,
+        world: WorldState,
+    ) -> None:
+        row = self.row
+        if row >= self.rec_steps.size or self.rec_steps[row] != k:
+            return
+        self.pose[row] = drive.pose
+        self.wheel["speed"][row] = drive.speed_rad_s
+        self.wheel["measured"][row] = drive.measured_rad_s
+        self.wheel["ref"][row] = command.reference_rad_s
+        self.wheel["current"][row] = drive.current_a
+        self.wheel["voltage"][row] = voltage
+        self.wheel["load"][row] = world.load_torque_n_m
+        for name, value in command.series.items():
+            if name not in self.series:
+                self.series[name] = np.empty((self.rec_steps.size, *np.shape(value)))
+            self.series[name][row] = value
+        self.row += 1
+
+    def recording(self, dt_s: float) -> Recording:
+        return Recording(
+            t_s=np.asarray(self.rec_steps * dt_s, dtype=np.float64),
+            pose=self.pose,
+            wheel_speed_rad_s=self.wheel["speed"],
+            wheel_speed_measured_rad_s=self.wheel["measured"],
+            wheel_speed_ref_rad_s=self.wheel["ref"],
+            current_a=self.wheel["current"],
+            voltage_v=self.wheel["voltage"],
+            load_torque_n_m=self.wheel["load"],
+            series=self.series,
+        )
