@@ -399,3 +399,19 @@ def test_bad_command_line_is_one_line_naming_the_flag(
     assert len(err.strip().splitlines()) == 1, err
     assert fragment in err
     assert "--help" in err
+
+
+def test_slam_summary_names_version_commit_seed_and_command(tmp_path: Path) -> None:
+    log = Path(__file__).resolve().parent / "data" / "victoria_park_first1500.txt"
+    out = tmp_path / "s"
+    argv = ["slam", str(log), "--particles", "5", "--seed", "4", "--no-plots", "--out", str(out)]
+    assert main(argv) in (0, 1)
+    provenance = json.loads((out / "summary.json").read_text())["provenance"]
+    assert provenance["seed"] == 4
+    assert provenance["firefleet_version"] == firefleet.__version__
+    assert shlex.split(provenance["command"]) == ["firefleet", *argv]
+    assert json.loads((out / MANIFEST).read_text())["files"] == [
+        "landmarks.csv",
+        "summary.json",
+        "trajectory.csv",
+    ]
