@@ -35,7 +35,6 @@ if __name__ == "__main__":
         os.environ.setdefault(_var, "1")
 
 import importlib
-import math
 import subprocess
 import tempfile
 import time
@@ -48,6 +47,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from firefleet.estimation import reference
 from firefleet.estimation.alignment import absolute_trajectory_error
 from firefleet.estimation.fastslam import (
     FastSlamParams,
@@ -78,48 +78,9 @@ def verdict(ok: bool) -> str:
 
 def gtsam_optimum(log: SlamLog, path: Path) -> tuple[np.ndarray, float, float]:
     """GTSAM's batch optimum of the log's poses (T, 2), its final error, and the time."""
-    import gtsam
-
-    graph, _ = gtsam.load2D(str(path))
-    order = {int(p): k for k, p in enumerate(log.pose_ids)}
-    buckets: list[list[Any]] = [[] for _ in range(log.n_poses)]
-    for i in range(graph.size()):
-        f = graph.at(i)
-        buckets[max(order[k] for k in f.keys() if k in order)].append(f)  # noqa: SIM118 (gtsam KeyVector)
-    prior = gtsam.PriorFactorPose2(
-        int(log.pose_ids[0]), gtsam.Pose2(), gtsam.noiseModel.Diagonal.Sigmas([1e-3, 1e-3, 1e-4])
-    )
     t0 = time.perf_counter()
-    isam = gtsam.ISAM2(gtsam.ISAM2Params())
-    est = gtsam.Values()
-    seen: set[int] = set()
-    for k, pid in enumerate(log.pose_ids):
-        fg = gtsam.NonlinearFactorGraph()
-        vals = gtsam.Values()
-        if k == 0:
-            fg.add(prior)
-            pose = gtsam.Pose2()
-        else:
-            pose = est.atPose2(int(log.pose_ids[k - 1])).compose(gtsam.Pose2(*log.odometry[k - 1]))
-        vals.insert(int(pid), pose)
-        for f in buckets[k]:
-            fg.add(f)
-            for key in f.keys():  # noqa: SIM118 (a gtsam KeyVector, not a dict)
-                if key in order or key in seen:
-                    continue
-                seen.add(key)
-                lid = gtsam.Symbol(key).index()
-                n = np.flatnonzero((log.obs_step == k) & (log.obs_landmark == lid))[0]
-                r, b = log.obs_z[n]
-                vals.insert(key, pose.transformFrom(np.array([r * math.cos(b), r * math.sin(b)])))
-        isam.update(fg, vals)
-        est = isam.calculateEstimate()
-    graph.add(prior)
-    opt = gtsam.LevenbergMarquardtOptimizer(graph, est, gtsam.LevenbergMarquardtParams())
-    best = opt.optimize()
-    seconds = time.perf_counter() - t0
-    ref = np.array([[best.atPose2(int(i)).x(), best.atPose2(int(i)).y()] for i in log.pose_ids])
-    return ref, float(graph.error(best)), seconds
+    ref, error = reference.gtsam_optimum(log, path)
+    return ref, error, time.perf_counter() - t0
 
 
 _CALIBRATED = FastSlamParams(version=2)  # the defaults: calibrated, sigmas x 2

@@ -18,6 +18,7 @@ from firefleet import builtin_names, load_scenario
 from firefleet.cli import main
 from firefleet.cli._console import claims_table, progress_bar
 from firefleet.cli._main import _parser
+from firefleet.cli._run import report_footer
 from firefleet.outputs import MANIFEST
 from firefleet.report.html import render_index
 
@@ -245,9 +246,9 @@ def test_metrics_name_version_commit_seed_and_command(tmp_path: Path) -> None:
 
 
 def test_report_footer_names_version_commit_command_and_seeds() -> None:
-    provenance = {"git_commit": "0123abc", "command": "firefleet reproduce --out r"}
-    page = render_index([], version="9.8.7", provenance=provenance, seeds={"motor-pid": 4})
-    footer = page[page.index("<footer>") :]
+    record = {"git_commit": "0123abc", "command": "firefleet reproduce --out r"}
+    page = render_index([], version="9.8.7", footer=report_footer(record, {"motor-pid": 4}))
+    footer = page[page.rindex("<p class=small>firefleet") :]
     for fragment in ("firefleet 9.8.7", "0123abc", "firefleet reproduce --out r", "motor-pid 4"):
         assert fragment in footer
 

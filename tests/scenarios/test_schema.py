@@ -127,7 +127,7 @@ def test_claims_check_their_bound() -> None:
     assert below.holds(0.99)
     assert not below.holds(1.0)
     assert not below.holds(float("nan"))
-    assert near.expected == "1.3955 \u00b1 0.5%"
+    assert near.expected == "1.3955 \u00b1 0.00698"  # 0.5 % of 1.3955, in rad/s
 
 
 def test_claims_on_per_robot_metrics() -> None:

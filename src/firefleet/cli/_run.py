@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -166,13 +166,25 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
             mark = "[green]ok" if all_passed(document) else "[red]CLAIM FAILED"
             out.print(f"{scn.name:<24} {mark}  {escape(scn.reproduces)}")
         seeds = {s.name: s.seed for s in scenarios}
-        index = render_index(entries, version=firefleet.__version__, provenance=record, seeds=seeds)
+        footer = report_footer(record, seeds)
+        index = render_index(entries, version=firefleet.__version__, footer=footer)
         (stage / "index.html").write_text(index, encoding="utf-8")
     total = sum(len(e.document["claims"]) for e in entries)
     passed = sum(c["passed"] for e in entries for c in e.document["claims"])
     out.print(f"{passed} of {total} claims passed")
     out.print(f"report: {(dest / 'index.html').resolve()}", markup=False, highlight=False)
     return EXIT_OK if passed == total else EXIT_CLAIM_FAILED
+
+
+def report_footer(record: Mapping[str, Any], seeds: Mapping[str, int]) -> str:
+    """The report footer's provenance: the git commit, the command line and the seeds."""
+    parts = []
+    if record.get("git_commit"):
+        parts.append(f"Commit {record['git_commit']}.")
+    parts.append(f"Made by: {record['command']}.")
+    if seeds:
+        parts.append("Seeds: " + ", ".join(f"{name} {seed}" for name, seed in seeds.items()) + ".")
+    return " ".join(parts)
 
 
 def _figure_number(label: str) -> tuple[int, str]:

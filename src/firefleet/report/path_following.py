@@ -23,9 +23,9 @@ _MARKERS = 10
 """Markers at this many equal time steps on a team's trajectories (Figures 32, 36)."""
 
 
-def _png(fig: matplotlib.figure.Figure) -> bytes:
+def _png(fig: matplotlib.figure.Figure, *, dpi: int = 110) -> bytes:
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
+    fig.savefig(buffer, format="png", dpi=dpi)
     plt.close(fig)
     return buffer.getvalue()
 
@@ -102,11 +102,11 @@ def _surface(
     title: str,
 ) -> None:
     ax.plot_surface(grid_x, grid_y, z, cmap="viridis", linewidth=0, antialiased=True)
-    ax.set_xlabel(labels[0], fontsize=8)
-    ax.set_ylabel(labels[1], fontsize=8)
-    ax.set_zlabel(labels[2], fontsize=8)
-    ax.set_title(title, fontsize=9)
-    ax.tick_params(labelsize=7)
+    ax.set_xlabel(labels[0], fontsize=11, labelpad=6)
+    ax.set_ylabel(labels[1], fontsize=11, labelpad=6)
+    ax.set_zlabel(labels[2], fontsize=11, labelpad=6)
+    ax.set_title(title, fontsize=12)
+    ax.tick_params(labelsize=10)
 
 
 def _memberships(ax: matplotlib.axes.Axes, system: SugenoSystem, index: int, title: str) -> None:
@@ -115,12 +115,12 @@ def _memberships(ax: matplotlib.axes.Axes, system: SugenoSystem, index: int, tit
     xs = np.linspace(lo, hi, 601)
     for mf in var.mfs:
         ax.plot(xs, membership(mf.kind, mf.params, xs), label=mf.name)
-    ax.set_title(title, fontsize=9)
-    ax.set_ylabel("membership", fontsize=8)
+    ax.set_title(title, fontsize=12)
+    ax.set_ylabel("membership", fontsize=11)
     ax.set_ylim(-0.02, 1.05)
-    ax.legend(fontsize=6, loc="center right")
+    ax.legend(fontsize=9, loc="center right")
     ax.grid(alpha=0.3)
-    ax.tick_params(labelsize=7)
+    ax.tick_params(labelsize=10)
 
 
 def _axes3d(fig: matplotlib.figure.Figure, index: int) -> Axes3D:
@@ -158,11 +158,11 @@ def controller_png(controller: PathFollowingController) -> bytes:
     ys = np.linspace(-3, 3, 301)
     ax = fig.add_subplot(3, 3, 6)
     ax.plot(ys, evaluate(lam, ys[:, None])[:, 0], color="tab:purple")
-    ax.set_title("Fig. 21: lambda(y_err) [deg]", fontsize=9)
-    ax.set_xlabel("y_err [m]", fontsize=8)
-    ax.set_ylabel("lambda [deg]", fontsize=8)
+    ax.set_title("Fig. 21: lambda(y_err) [deg]", fontsize=12)
+    ax.set_xlabel("y_err [m]", fontsize=11)
+    ax.set_ylabel("lambda [deg]", fontsize=11)
     ax.grid(alpha=0.3)
-    ax.tick_params(labelsize=7)
+    ax.tick_params(labelsize=10)
     xe, d2 = np.meshgrid(np.linspace(-0.3, 0.3, 41), np.linspace(0, 3, 41))
     out = evaluate(main, np.stack([d2.ravel(), xe.ravel(), np.zeros(d2.size)], axis=1))
     _surface(
@@ -185,9 +185,10 @@ def controller_png(controller: PathFollowingController) -> bytes:
     )
     _memberships(fig.add_subplot(3, 3, 9), main, 1, "x_err [m] (range -3..3 m, zoomed)")
     fig.axes[-1].set_xlim(-0.2, 0.4)
-    fig.suptitle("The fuzzy path-following controller (control/data/*.fis)")
+    fig.suptitle("The fuzzy path-following controller (control/data/*.fis)", fontsize=14)
     fig.tight_layout(w_pad=4.0)
-    return _png(fig)
+    # 1,040 px wide: the report shows it at about its own size, 10-12 pt text stays legible
+    return _png(fig, dpi=80)
 
 
 def figures(result: SimResult) -> dict[str, bytes]:

@@ -53,18 +53,24 @@ def _speed_reference(ax: matplotlib.axes.Axes, result: SimResult) -> None:
 
 
 def _voltage_input(ax: matplotlib.axes.Axes, result: SimResult) -> None:
-    """The open loop's input voltage and the analytic steady speed (Figure 24)."""
-    cmd = cast(VoltageStep, result.scenario.command)
-    t = result.t
-    level = cmd.voltage_v * np.where(t >= cmd.start_s - 1e-9, 1.0, 0.0)
-    ax.plot(
-        t,
-        level,
-        "k--",
-        lw=1.2,
-        label=f'input {cmd.voltage_v:g} V (the deliverable\'s "reference")',
+    """The analytic steady speed of the open loop (Figure 24), and a note on its input.
+
+    The input is a voltage: it is drawn on the voltage axis below, not on this rad/s
+    axis. The deliverable calls it the motor's "1 rad/sec reference": the note says so.
+    """
+    scn = result.scenario
+    cmd = cast(VoltageStep, scn.command)
+    ax.text(
+        0.98,
+        0.45,
+        f'input: a {cmd.voltage_v:g} V step (bottom panel),\nthe deliverable\'s "reference"',
+        transform=ax.transAxes,
+        ha="right",
+        va="center",
+        fontsize=8,
+        color="0.3",
     )
-    steady = cmd.voltage_v * result.scenario.motor.speed_gain_rad_s_per_v
+    steady = cmd.voltage_v * scn.motor.speed_gain_rad_s_per_v
     ax.axhline(
         steady,
         color="tab:red",

@@ -16,8 +16,10 @@ from numpy.typing import NDArray
 
 from firefleet.estimation.fastslam import FastSlamResult
 from firefleet.estimation.logs import SlamLog
+from firefleet.report.html import ReportRun
+from firefleet.scenarios.schema import Claim
 
-__all__ = ["slam_animation_gif", "slam_figure_png"]
+__all__ = ["slam_animation_gif", "slam_figure_png", "slam_report_runs"]
 
 FloatArray = NDArray[np.float64]
 
@@ -66,13 +68,17 @@ def _title(log: SlamLog, result: FastSlamResult) -> str:
     )
 
 
-def slam_figure_png(log: SlamLog, result: FastSlamResult) -> bytes:
+def slam_figure_png(
+    log: SlamLog, result: FastSlamResult, *, reference: FloatArray | None = None
+) -> bytes:
     """The estimated trajectory and map over the odometry-only track (and the truth).
 
     Parameters
     ----------
     log : SlamLog
     result : FastSlamResult
+    reference : ndarray, shape (T, 2), optional
+        A reference trajectory to draw too (GTSAM's batch optimum on real data) [m].
 
     Returns
     -------
@@ -82,6 +88,10 @@ def slam_figure_png(log: SlamLog, result: FastSlamResult) -> bytes:
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(8, 7))
     _static(ax, log, result)
+    if reference is not None:
+        ax.plot(
+            reference[:, 0], reference[:, 1], color="0.2", lw=2.4, alpha=0.35, label="GTSAM optimum"
+        )
     tr = result.trajectory
     ax.plot(tr[:, 0], tr[:, 1], color="tab:blue", lw=1.2, label="FastSLAM trajectory")
     lm = result.landmarks
@@ -151,3 +161,100 @@ def slam_animation_gif(log: SlamLog, result: FastSlamResult, *, fps: int = 8) ->
         data = path.read_bytes()
     plt.close(fig)
     return data
+
+
+def slam_report_runs(victoria_park: Path | None = None, *, seed: int = 1) -> tuple[ReportRun, ...]:
+    """Section 2.7.3 of the report: FastSLAM on the simulated loop and on Victoria Park.
+
+    Parameters
+    ----------
+    victoria_park : Path, optional
+        The Victoria Park log in GTSAM's text format; without it (or without GTSAM) only
+        the simulated loop is run.
+    seed : int
+        Seed of the filter's randomness on Victoria Park (the simulated loop uses 0,
+        as ``firefleet slam sim-loop`` does).
+
+    Returns
+    -------
+    tuple of ReportRun
+        ``slam-sim-loop`` (FastSLAM 2.0 with firefleet's defaults against the known
+        truth: the claims of ``firefleet slam sim-loop``), and ``slam-victoria-park``
+        (the default run's absolute trajectory error against GTSAM's optimum, claimed
+        at most 5 m).
+    """
+    from firefleet.estimation.alignment import absolute_trajectory_error
+    from firefleet.estimation.fastslam import (
+        FastSlamParams,
+        default_n_particles,
+        run_fastslam,
+        slam_claims,
+        slam_summary,
+    )
+    from firefleet.estimation.logs import read_log
+    from firefleet.estimation.reference import gtsam_optimum
+    from firefleet.sim.metrics import metrics_document
+    from firefleet.sim.world import SIM_LOOP, load_or_simulate_log
+
+    says = (
+        '"In our case, we will use a Particle Filter (PF) based SLAM" (2.7.3); the posterior '
+        "p(x_t | o_t) is proportional to p(o_t | x_t) p(x_t | x_t-1). The deliverable leaves "
+        'the details "to the next report".'
+    )
+    params = FastSlamParams(version=2, n_particles=default_n_particles("known"))
+    log = load_or_simulate_log(SIM_LOOP, seed=0)
+    result = run_fastslam(log, np.random.default_rng(0), params=params, n_snapshots=0)
+    summary = slam_summary(log, result)
+    runs = [
+        ReportRun(
+            name="slam-sim-loop",
+            title="FastSLAM 2.0 on a simulated 100 m loop among heat sources",
+            reproduces="Section 2.7.3: particle-filter SLAM",
+            deliverable_says=says,
+            command="firefleet slam sim-loop",
+            files={"slam.png": slam_figure_png(log, result)},
+            figures=("slam.png",),
+            document=metrics_document(
+                "slam-sim-loop", slam_claims(summary, association="known"), dict(summary)
+            ),
+        )
+    ]
+    if victoria_park is None:
+        return tuple(runs)
+    try:
+        import gtsam  # noqa: F401
+    except ImportError:
+        return tuple(runs)
+    vp = read_log(victoria_park)
+    reference, _ = gtsam_optimum(vp, victoria_park)
+    vp_result = run_fastslam(vp, np.random.default_rng(seed), params=params, n_snapshots=0)
+    ate = absolute_trajectory_error(vp_result.trajectory[:, :2], reference)
+    odometry_ate = absolute_trajectory_error(vp_result.dead_reckoning[:, :2], reference)
+    vp_claims = (
+        Claim(
+            metric="ate_vs_gtsam_m",
+            op="<=",
+            value=5.0,
+            source="firefleet's bound: within 5 m of GTSAM's batch optimum over the 4 km drive "
+            "(the default options, no tuning)",
+        ),
+    )
+    vp_metrics: dict[str, float | list[float]] = {
+        "ate_vs_gtsam_m": ate,
+        "odometry_ate_vs_gtsam_m": odometry_ate,
+        "particles": float(params.n_particles),
+        "seed": float(seed),
+    }
+    runs.append(
+        ReportRun(
+            name="slam-victoria-park",
+            title="FastSLAM 2.0 on Victoria Park against GTSAM's batch optimum",
+            reproduces="Section 2.7.3: particle-filter SLAM on real data",
+            deliverable_says=says,
+            command=f"firefleet slam {victoria_park.name} --seed {seed}",
+            files={"slam.png": slam_figure_png(vp, vp_result, reference=reference)},
+            figures=("slam.png",),
+            document=metrics_document("slam-victoria-park", vp_claims, vp_metrics),
+        )
+    )
+    return tuple(runs)

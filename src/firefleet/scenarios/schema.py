@@ -105,9 +105,10 @@ class Claim:
 
     @property
     def expected(self) -> str:
-        """The claim as a person reads it, e.g. ``"< 0.2"`` or ``"1.3955 +- 0.5%"``."""
+        """The claim as a person reads it, in the metric's own unit, e.g. ``"< 0.2"`` or
+        ``"1.3955 +- 0.00698"`` (the tolerance ``rel_tol |value|``, in the value's unit)."""
         if self.op == "~":
-            return f"{self.value:g} \u00b1 {100 * self.rel_tol:g}%"
+            return f"{self.value:g} \u00b1 {self.rel_tol * abs(self.value):.3g}"
         return f"{self.op} {self.value:g}"
 
     def holds(self, measured: float | Sequence[float] | None) -> bool:

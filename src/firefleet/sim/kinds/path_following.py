@@ -324,7 +324,13 @@ def path_following_metrics(result: SimResult) -> Metrics:
     (first time within ``arrival_radius_m`` of the path's end) and, for the team,
     ``arrival_spread_s``; ``mean_speed_m_s`` (distance driven / time under way until
     arrival); ``longest_path_speed_margin_m_s`` (mean speed of the robot on the longest
-    path minus the fastest other's; NaN for one robot); ``sync_distance_m`` (arc length
+    path minus the fastest other's; NaN for one robot); ``omega_peak_rad_s`` and
+    ``y_err_peak_m`` (largest commanded |omega| and |y_err| of each robot: the initial
+    peaks of Figures 34 and 35); ``longest_path_omega_peak_margin_rad_s`` (the smallest
+    omega peak of the other robots minus the longest path's: > 0 when the others turn
+    harder, Figure 34) and ``longest_path_y_err_peak_margin_m`` (the longest path's y_err
+    peak minus the largest other's: > 0 when it is the largest, Figure 35), NaN for one
+    robot; ``sync_distance_m`` (arc length
     from which on every robot's progress along its path, as a share of its length,
     stays within one piece of every other's: the formation of Figures 32 and 36,
     measured on the paths' average length; NaN for one robot); ``odometry_drift_m``
@@ -374,6 +380,18 @@ def path_following_metrics(result: SimResult) -> Metrics:
     longest = int(np.argmax(lengths))
     others = [s for i, s in enumerate(speed) if i != longest]
     out["longest_path_speed_margin_m_s"] = speed[longest] - max(others) if others else math.nan
+    omega_peak = [float(v) for v in np.abs(result.extra["omega_ref_rad_s"]).max(axis=0)]
+    y_peak = [float(v) for v in np.abs(result.extra["y_err_m"]).max(axis=0)]
+    out["omega_peak_rad_s"] = omega_peak
+    out["y_err_peak_m"] = y_peak
+    other_omega = [w for i, w in enumerate(omega_peak) if i != longest]
+    other_y = [y for i, y in enumerate(y_peak) if i != longest]
+    out["longest_path_omega_peak_margin_rad_s"] = (
+        min(other_omega) - omega_peak[longest] if other_omega else math.nan
+    )
+    out["longest_path_y_err_peak_margin_m"] = (
+        y_peak[longest] - max(other_y) if other_y else math.nan
+    )
     out["sync_distance_m"] = _sync_distance(progress, cmd.pieces, float(np.mean(lengths)))
     odom = result.extra["odometry_pose"]
     out["odometry_drift_m"] = [float(v) for v in np.hypot(*(odom[-1, :, :2] - xy[-1]).T)]
@@ -419,6 +437,10 @@ KINDS = (
             "arrival_spread_s",
             "mean_speed_m_s",
             "longest_path_speed_margin_m_s",
+            "omega_peak_rad_s",
+            "y_err_peak_m",
+            "longest_path_omega_peak_margin_rad_s",
+            "longest_path_y_err_peak_margin_m",
             "sync_distance_m",
             "odometry_drift_m",
             "peak_current_a",
