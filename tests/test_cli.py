@@ -157,6 +157,8 @@ def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[s
     )
     assert total >= 25  # 6 motor claims, 19 path-following claims
     assert f"{total} of {total} claims passed" in index
+    assert f"Made by: firefleet reproduce --out {out}." in index  # the footer's provenance
+    assert "Seeds: " in index
     assert "FAILED" not in index
     assert str((out / "index.html").resolve()) in capsys.readouterr().out
 
