@@ -238,7 +238,7 @@ def formation_animation(result: SimResult, *, frames: int = _GIF_FRAMES) -> byte
     lo = np.minimum(pose[:, :, :2].min(axis=(0, 1)), leader.min(axis=0) - cmd.alpha_m) - 0.5
     hi = np.maximum(pose[:, :, :2].max(axis=(0, 1)), leader.max(axis=0) + cmd.alpha_m) + 0.5
     height = float(np.clip(6.0 * (hi[1] - lo[1]) / (hi[0] - lo[0]), 2.5, 6.0))
-    fig, ax = plt.subplots(figsize=(6.5, height + 0.9))
+    fig, ax = plt.subplots(figsize=(8.0, height + 1.0))
     _scene(ax, result, cmd)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
@@ -250,7 +250,9 @@ def formation_animation(result: SimResult, *, frames: int = _GIF_FRAMES) -> byte
     trails = [ax.plot([], [], color=colors[k], lw=0.8, alpha=0.6)[0] for k in range(n)]
     ring = ax.add_patch(plt.Circle((0.0, 0.0), cmd.alpha_m, fill=False, color="tab:red", ls=":"))
     (centre,) = ax.plot([], [], "k+", ms=10, mew=2)
-    title = ax.set_title("", fontsize=9)
+    # laid out with the longest title it will show, so that no frame clips it
+    title = ax.set_title(f"{result.scenario.name}   t = {result.t[-1]:5.1f} s", fontsize=12)
+    fig.tight_layout()
 
     def draw(i: int) -> list[Any]:
         j = int(idx[i])
@@ -266,7 +268,8 @@ def formation_animation(result: SimResult, *, frames: int = _GIF_FRAMES) -> byte
     anim = FuncAnimation(fig, draw, frames=idx.size, blit=False)
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "formation.gif"
-        anim.save(str(path), writer=PillowWriter(fps=_GIF_FPS), dpi=72)
+        # 800 px wide at 100 dpi: the report shows it at its own size, text legible
+        anim.save(str(path), writer=PillowWriter(fps=_GIF_FPS), dpi=100)
         data = path.read_bytes()
     plt.close(fig)
     return data

@@ -198,7 +198,7 @@ class PathFollowing:
             raise InputError(f"arrival_radius_m must be > 0, got {self.arrival_radius_m}")
 
 
-# --- formation control (issue 4): the command of the formation-* scenarios ---------------
+# --- formation control (section 2.3): the command of the formation-* scenarios ---------------
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)

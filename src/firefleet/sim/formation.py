@@ -1,4 +1,4 @@
-"""The formation runner and its metrics (deliverable section 2.3; issue 4).
+"""The formation runner and its metrics (deliverable section 2.3).
 
 Each tick, for the whole team at once::
 
@@ -19,7 +19,7 @@ point, a point ``l`` ahead of the axle centre (Lawton, Beard and Young, "A decen
 approach to formation maneuvers", IEEE Trans. Robotics and Automation 19(6), 2003):
 its velocity is any u the wheels can give, so the point-mass law carries over.
 
-Stability (issue 13). Each step holds the force over ``dt_s`` (a sampled controller),
+Stability. Each step holds the force over ``dt_s`` (a sampled controller),
 and the exact step of eq. 5 under a held restoring force of stiffness kappa is stable
 only for kappa below about ``2 (B + k_d) / dt_s`` (400 N/m at the deliverable's 2 N s/m
 and 10 ms; :func:`substeps`). What made teams diverge, measured: with eq. 6 uncapped

@@ -1,4 +1,4 @@
-"""Formation control (issue 4): the team keeps a regular polygon around a leader.
+"""Formation control (deliverable section 2.3): the team keeps a regular polygon around a leader.
 
 The run is :func:`firefleet.sim.formation.simulate_formation` (its own loop, not yet on
 :mod:`firefleet.sim.loop`), its metrics :func:`firefleet.sim.formation.formation_metrics`,
