@@ -27,7 +27,7 @@ def test_fis_prints_tables_and_writes_plots(
     text = capsys.readouterr().out
     for expected in ("input dist", "output turn", "dist is near", "angle is not left", "0.5"):
         assert expected in text
-    names = sorted(p.name for p in out.iterdir())
+    names = sorted(p.name for p in out.glob("[!.]*"))
     assert names == [
         "mf_angle.png",
         "mf_dist.png",
