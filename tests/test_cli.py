@@ -145,19 +145,34 @@ def test_list_names_every_builtin(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "report"
-    assert main(["reproduce", "--out", str(out)]) == 0
+    no_data = tmp_path / "no-data"  # section 2.7 without Victoria Park: said, not failed
+    no_data.mkdir()
+    assert main(["reproduce", "--out", str(out), "--data", str(no_data)]) == 0
     index = (out / "index.html").read_text()
     for figure, name in (("Figure 24", "motor-open-loop"), ("Figure 25", "motor-pid")):
         assert figure in index
         assert f'src="{name}/response.png"' in index
         assert (out / name / "response.png").is_file()
         assert (out / name / "metrics.json").is_file()
-    total = sum(
+    # the deliverable's sections in its order, then what goes beyond it
+    heads = [index.index(f"<h2 class=part>{h}") for h in ("2.3 ", "2.6.4.1 ", "2.6.5 ", "2.7 ")]
+    assert heads == sorted(heads) < [index.index("<h2 class=part>Beyond the deliverable")]
+    for run in ("thermal", "stereo-motorcycle", "stereo-uncalibrated", "slam-sim-loop"):
+        assert f'id="{run}"' in index
+        assert (out / run / "metrics.json").is_file()
+    assert 'id="slam-victoria-park"' not in index
+    assert "Victoria Park (slam/victoria_park.txt)" in index  # what was left out, said
+    scenario_claims = sum(
         len(load_scenario(n).claims) for n in builtin_names() if load_scenario(n).reproduces
     )
-    assert total >= 25  # 6 motor claims, 19 path-following claims
+    documents = [json.loads(p.read_text()) for p in out.glob("*/metrics.json")]
+    total = sum(len(d["claims"]) for d in documents)
+    assert total > scenario_claims >= 25
     assert f"{total} of {total} claims passed" in index
-    assert f"Made by: firefleet reproduce --out {out}." in index  # the footer's provenance
+    assert index.count('src="path-straight/controller.png"') == 1  # shown once
+    assert "controller.png" not in index.split('id="path-curved-on"')[1].split("<img")[0]
+    assert "issue" not in index.lower()
+    assert f"Made by: firefleet reproduce --out {out} --data {no_data}." in index
     assert "Seeds: " in index
     assert "FAILED" not in index
     assert str((out / "index.html").resolve()) in capsys.readouterr().out

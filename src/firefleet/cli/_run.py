@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -52,6 +53,12 @@ def add_parsers(sub: Any) -> None:
         metavar="DIR",
         default="firefleet-report",
         help="report folder (default firefleet-report)",
+    )
+    reproduce.add_argument(
+        "--data",
+        metavar="DIR",
+        help="real data for section 2.7 (thermal/*.npy, slam/victoria_park.txt) "
+        "(default: $FIREFLEET_DATA, else ../shared/data beside a checkout)",
     )
     reproduce.set_defaults(handler=cmd_reproduce)
 
@@ -165,15 +172,112 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
             )
             mark = "[green]ok" if all_passed(document) else "[red]CLAIM FAILED"
             out.print(f"{scn.name:<24} {mark}  {escape(scn.reproduces)}")
+        missing = _section_27(stage, entries, args, out, err)
         seeds = {s.name: s.seed for s in scenarios}
         footer = report_footer(record, seeds)
-        index = render_index(entries, version=firefleet.__version__, footer=footer)
+        index = render_index(entries, version=firefleet.__version__, footer=footer, missing=missing)
         (stage / "index.html").write_text(index, encoding="utf-8")
     total = sum(len(e.document["claims"]) for e in entries)
     passed = sum(c["passed"] for e in entries for c in e.document["claims"])
     out.print(f"{passed} of {total} claims passed")
     out.print(f"report: {(dest / 'index.html').resolve()}", markup=False, highlight=False)
     return EXIT_OK if passed == total else EXIT_CLAIM_FAILED
+
+
+def _data_dir(args: argparse.Namespace) -> Path | None:
+    """Where section 2.7's real data is: ``--data``, ``$FIREFLEET_DATA``, or the shared
+    data set beside a checkout (``<repo>/../shared/data``); None if none exists."""
+    if args.data is not None:
+        given = Path(args.data)
+        if not given.is_dir():
+            raise InputError(f"--data {given}: no such folder")
+        return given
+    env = os.environ.get("FIREFLEET_DATA")
+    if env:
+        return Path(env) if Path(env).is_dir() else None
+    beside = Path(__file__).resolve().parents[3].parent / "shared" / "data"
+    return beside if beside.is_dir() else None
+
+
+def _thermal_frames(data: Path | None) -> dict[str, Any]:
+    """The known-answer FLIR frames: from the data folder, else the checkout's tests/data."""
+    import numpy as np
+
+    from firefleet.report.sensing import KNOWN_FRAMES
+
+    frames: dict[str, Any] = {}
+    for name in KNOWN_FRAMES:
+        npy = data / "thermal" / f"{name}.npy" if data is not None else None
+        npz = Path(__file__).resolve().parents[3] / "tests" / "data" / "thermal" / f"{name}.npz"
+        if npy is not None and npy.is_file():
+            frames[name] = np.load(npy)
+        elif npz.is_file():
+            with np.load(npz) as archive:
+                frames[name] = archive["celsius"]
+    return frames
+
+
+def _section_27(
+    stage: Path,
+    entries: list[Any],
+    args: argparse.Namespace,
+    out: Console,
+    err: Console,
+) -> str:
+    """Section 2.7's runs (thermal, stereo, SLAM) into the report; what was left out."""
+    from firefleet.report.html import ReportEntry, ReportRun
+    from firefleet.report.sensing import stereo_runs, thermal_run
+    from firefleet.report.slam import slam_report_runs
+
+    data = _data_dir(args)
+    frames = _thermal_frames(data)
+    park = data / "slam" / "victoria_park.txt" if data is not None else None
+    park = park if park is not None and park.is_file() else None
+    missing = []
+    if not frames:
+        missing.append("the real FLIR frames (thermal/*.npy)")
+    if park is None:
+        missing.append("Victoria Park (slam/victoria_park.txt)")
+    runs: list[ReportRun] = []
+    with progress_bar(err, "section 2.7: thermal, stereo, SLAM") as progress:
+        progress(0, 3)
+        runs.append(thermal_run(frames))
+        progress(1, 3)
+        runs += stereo_runs()
+        progress(2, 3)
+        runs += slam_report_runs(park)
+        progress(3, 3)
+    if park is not None and not any(r.name == "slam-victoria-park" for r in runs):
+        missing.append("Victoria Park's GTSAM reference (the gtsam package is not installed)")
+    for run in runs:
+        folder = stage / run.name
+        folder.mkdir()
+        for name, data_bytes in run.files.items():
+            (folder / name).write_bytes(data_bytes)
+        (folder / "metrics.json").write_text(json_text(run.document), encoding="utf-8")
+        entries.append(
+            ReportEntry(
+                name=run.name,
+                title=run.title,
+                reproduces=run.reproduces,
+                deliverable_says=run.deliverable_says,
+                folder=run.name,
+                figures=run.figures,
+                document=run.document,
+                command=run.command,
+                links=("metrics.json",),
+                captions=run.captions,
+            )
+        )
+        mark = "[green]ok" if all_passed(run.document) else "[red]CLAIM FAILED"
+        out.print(f"{run.name:<24} {mark}  {escape(run.reproduces)}")
+    if not missing:
+        return ""
+    return (
+        "Not in this report, its data not found (give --data DIR or set FIREFLEET_DATA): "
+        + "; ".join(missing)
+        + "."
+    )
 
 
 def report_footer(record: Mapping[str, Any], seeds: Mapping[str, int]) -> str:
