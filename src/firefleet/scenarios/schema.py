@@ -149,6 +149,9 @@ class VoltageStep:
     voltage_v: float
     start_s: float = 0.0
 
+    def check_team(self, n_robots: int, duration_s: float) -> None:
+        """Every team and run length suits a motor step (nothing to check)."""
+
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class WheelSpeedStep:
@@ -157,6 +160,9 @@ class WheelSpeedStep:
     kind: Literal["wheel-speed-step"]
     speed_rad_s: float
     start_s: float = 0.0
+
+    def check_team(self, n_robots: int, duration_s: float) -> None:
+        """Every team and run length suits a motor step (nothing to check)."""
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
@@ -196,6 +202,25 @@ class PathFollowing:
             raise InputError(f"pieces must be >= 1, got {self.pieces}")
         if not (math.isfinite(self.arrival_radius_m) and self.arrival_radius_m > 0):
             raise InputError(f"arrival_radius_m must be > 0, got {self.arrival_radius_m}")
+
+    def check_team(self, n_robots: int, duration_s: float) -> None:
+        """One path per robot, and the trajectory due within the run.
+
+        Raises
+        ------
+        InputError
+            Naming the counts or the times.
+        """
+        if len(self.paths) != n_robots:
+            raise InputError(
+                f"command.paths: one path per robot, got {len(self.paths)} "
+                f"paths for {n_robots} poses"
+            )
+        if self.trajectory_s > duration_s:
+            raise InputError(
+                f"command.trajectory_s ({self.trajectory_s} s) is longer than "
+                f"duration_s ({duration_s} s)"
+            )
 
 
 # --- formation control (section 2.3): the command of the formation-* scenarios ---------------
@@ -450,19 +475,7 @@ class Scenario:
             )
         if self.seed < 0:
             raise InputError(f"seed must be >= 0, got {self.seed}")
-        if isinstance(self.command, Formation):
-            self.command.check_team(self.n_robots, self.duration_s)
-        if isinstance(self.command, PathFollowing):
-            if len(self.command.paths) != self.n_robots:
-                raise InputError(
-                    f"command.paths: one path per robot, got {len(self.command.paths)} "
-                    f"paths for {self.n_robots} poses"
-                )
-            if self.command.trajectory_s > self.duration_s:
-                raise InputError(
-                    f"command.trajectory_s ({self.command.trajectory_s} s) is longer than "
-                    f"duration_s ({self.duration_s} s)"
-                )
+        self.command.check_team(self.n_robots, self.duration_s)  # each command's own rule
         known = _metric_names(self.command.kind)
         for claim in self.claims:
             if claim.metric not in known:
