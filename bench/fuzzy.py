@@ -20,12 +20,18 @@ Measured (best of several timed runs after an untimed warm-up):
 2. batches of 10,000: firefleet ``evaluate(system, X)`` with X (10,000, 4);
    scikit-fuzzy with array inputs of 10,000 (its array mode).
 
-Floors (issue 3): firefleet one at a time at least 100x scikit-fuzzy one at a time;
-firefleet in batches of 10,000 at least 10,000x scikit-fuzzy one at a time (the
-ratio to scikit-fuzzy's own array mode is reported beside it). The two controllers
-are different inference methods (weighted average against clipped-triangle centroid
-with max accumulation), so their outputs agree only roughly: the distance is
-printed, not judged.
+Also measured, without a peer: the compiled ``eval_one`` that the simulator's team loop
+inlines per robot and tick, called in a compiled loop (the cost of one robot's fuzzy
+decision inside the simulator).
+
+Floors: firefleet one at a time at least 100x scikit-fuzzy one at a time; firefleet
+in batches of 10,000 at least 10,000x scikit-fuzzy one at a time (the ratio to
+scikit-fuzzy's own array mode is reported beside it); the public API one sample at a
+time (``evaluate(system, x)``, x of shape (4,)) at least 300,000 evaluations per
+second (the floor of the one-simulator issue; 77,000/s before the compiled path).
+The two controllers are different inference methods (weighted average against
+clipped-triangle centroid with max accumulation), so their outputs agree only
+roughly: the distance is printed, not judged.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import numba
 import numpy as np
 import skfuzzy
 from numpy.typing import NDArray
@@ -43,6 +50,7 @@ from rich.console import Console
 from rich.table import Table
 from skfuzzy import control as skctrl
 
+from _harness import Floor, Row, TopicResult, best_of
 from firefleet.control.fuzzy import (
     FuzzyInput,
     FuzzyOutput,
@@ -52,6 +60,7 @@ from firefleet.control.fuzzy import (
     SugenoSystem,
     evaluate,
 )
+from firefleet.control.fuzzy_kernel import FisTables, compile_system, eval_one
 
 FloatArray = NDArray[np.float64]
 
@@ -59,6 +68,10 @@ FLOOR_SINGLE = 100.0
 """Floor: one-at-a-time speed-up over scikit-fuzzy one at a time."""
 FLOOR_BATCH = 10_000.0
 """Floor: batch-of-10,000 throughput over scikit-fuzzy one at a time."""
+FLOOR_SINGLE_PER_S = 300_000.0
+"""Floor: public-API evaluations per second, one sample per call."""
+KERNEL_SAMPLES = 200_000
+"""Samples of the compiled eval_one loop per timed run."""
 BATCH = 10_000
 SINGLE_SAMPLES = 2_000
 """Samples of firefleet's one-at-a-time loop per timed run."""
@@ -224,17 +237,6 @@ def samples(n: int, seed: int) -> FloatArray:
     )
 
 
-def best_of(fn: Callable[[], object], repeats: int) -> float:
-    """Best wall time [s] of ``repeats`` calls after one untimed call."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
-
-
 def peer_one(sim: Any, x: FloatArray) -> tuple[float, float]:
     sim.input["D_rp"] = x[0]
     sim.input["x_err"] = x[1]
@@ -243,28 +245,82 @@ def peer_one(sim: Any, x: FloatArray) -> tuple[float, float]:
     return float(sim.output["v"]), float(sim.output["omega"])
 
 
+@numba.njit(cache=True)
+def _kernel_loop(x: FloatArray, t: FisTables, out: FloatArray) -> None:  # pragma: no cover - jit
+    """``eval_one`` on every row of ``x``, as the simulator's team loop calls it."""
+    # the tables as local arrays, as the simulator passes them (not a tuple's fields)
+    kind, par, inp, rng, rmf, rnot = (
+        t.mf_kind,
+        t.mf_params,
+        t.mf_input,
+        t.in_range,
+        t.rule_mf,
+        t.rule_not,
+    )
+    rw, ror, rout, coef, mid, flags = (
+        t.rule_weight,
+        t.rule_or,
+        t.rule_out,
+        t.out_coef,
+        t.out_mid,
+        t.flags,
+    )
+    work = np.empty(x.shape[1] + kind.shape[0] + 2 * out.shape[1])
+    row = np.empty(x.shape[1])
+    y = np.empty(out.shape[1])
+    for k in range(x.shape[0]):
+        for i in range(x.shape[1]):
+            row[i] = x[k, i]
+        eval_one(
+            row,
+            kind,
+            par,
+            inp,
+            rng,
+            rmf,
+            rnot,
+            rw,
+            ror,
+            rout,
+            coef,
+            mid,
+            flags,
+            y,
+            work,
+        )
+        for j in range(out.shape[1]):
+            out[k, j] = y[j]
+
+
 def verdict(ok: bool) -> str:
     return "[bold green]PASS[/]" if ok else "[bold red]FAIL[/]"
 
 
-def run(console: Console) -> dict[str, Any]:
-    """Measure, print the tables, return every number (JSON-able)."""
+def run(console: Console) -> TopicResult:
+    """Measure, print the tables, return the rows, the floors and every number."""
     system = our_system()
     control_system = peer_system()
     single_x = samples(SINGLE_SAMPLES, 1)
     peer_x = samples(PEER_SINGLE_SAMPLES, 2)
     batch_x = samples(BATCH, 3)
-    rows = list(single_x)
+    single_rows = list(single_x)
 
     console.print(f"  firefleet one at a time ({SINGLE_SAMPLES} samples x {REPEATS}) ...")
 
     def ours_single() -> None:
-        for row in rows:
+        for row in single_rows:
             evaluate(system, row)
 
-    ours_single_s = best_of(ours_single, REPEATS) / SINGLE_SAMPLES
+    ours_single_s = best_of(ours_single, REPEATS).best_s / SINGLE_SAMPLES
     console.print(f"  firefleet batches of {BATCH:,} ({REPEATS} runs) ...")
-    ours_batch_s = best_of(lambda: evaluate(system, batch_x), REPEATS) / BATCH
+    ours_batch_s = best_of(lambda: evaluate(system, batch_x), REPEATS).best_s / BATCH
+    console.print(f"  firefleet compiled eval_one loop ({KERNEL_SAMPLES:,} samples) ...")
+    tables = compile_system(system)
+    kernel_x = samples(KERNEL_SAMPLES, 4)
+    kernel_out = np.empty((KERNEL_SAMPLES, len(system.outputs)))
+    kernel_s = best_of(lambda: _kernel_loop(kernel_x, tables, kernel_out), REPEATS).best_s
+    kernel_s /= KERNEL_SAMPLES
+    kernel_ok = bool(np.array_equal(kernel_out[:BATCH], evaluate(system, kernel_x[:BATCH])))
 
     console.print(
         f"  scikit-fuzzy one at a time ({PEER_SINGLE_SAMPLES} samples x {PEER_REPEATS}) ..."
@@ -276,7 +332,7 @@ def run(console: Console) -> dict[str, Any]:
         for row in peer_rows:
             peer_one(sim, row)
 
-    peer_single_s = best_of(peer_single, PEER_REPEATS) / PEER_SINGLE_SAMPLES
+    peer_single_s = best_of(peer_single, PEER_REPEATS).best_s / PEER_SINGLE_SAMPLES
 
     console.print(f"  scikit-fuzzy array mode, {BATCH:,} samples (one timed run) ...")
 
@@ -312,31 +368,51 @@ def run(console: Console) -> dict[str, Any]:
     for who, mode, sec in (
         ("firefleet (Sugeno)", "one at a time", ours_single_s),
         ("firefleet (Sugeno)", f"batches of {BATCH:,}", ours_batch_s),
+        ("firefleet (Sugeno)", "eval_one in a compiled loop", kernel_s),
         ("scikit-fuzzy (Mamdani)", "one at a time", peer_single_s),
         ("scikit-fuzzy (Mamdani)", f"array of {BATCH:,}", peer_batch_s),
     ):
         table.add_row(who, mode, f"{1 / sec:,.0f}", f"{sec * 1e6:,.3f}")
     console.print(table)
-    floors: list[dict[str, Any]] = [
-        {
-            "name": "one at a time: scikit-fuzzy time / firefleet time",
-            "required": FLOOR_SINGLE,
-            "measured": ratio_single,
-            "pass": ratio_single >= FLOOR_SINGLE,
-        },
-        {
-            "name": f"batches of {BATCH:,}: scikit-fuzzy (one at a time) / firefleet, per sample",
-            "required": FLOOR_BATCH,
-            "measured": ratio_batch,
-            "pass": ratio_batch >= FLOOR_BATCH,
-        },
-    ]
+    rows = (
+        Row(
+            "fuzzy.single.evals_per_s",
+            1 / ours_single_s,
+            "evals/s",
+            label="fuzzy controller one at a time (public API): evaluations per second",
+        ),
+        Row(
+            "fuzzy.batch10000.evals_per_s",
+            1 / ours_batch_s,
+            "evals/s",
+            label=f"fuzzy controller, batches of {BATCH:,}: evaluations per second",
+        ),
+        Row(
+            "fuzzy.kernel.evals_per_s",
+            1 / kernel_s,
+            "evals/s",
+            label="fuzzy eval_one in a compiled loop (as the simulator calls it): evaluations/s",
+        ),
+    )
+    floors = (
+        Floor("one at a time: scikit-fuzzy time / firefleet time", ratio_single, FLOOR_SINGLE, "x"),
+        Floor(
+            f"batches of {BATCH:,}: scikit-fuzzy (one at a time) / firefleet, per sample",
+            ratio_batch,
+            FLOOR_BATCH,
+            "x",
+        ),
+        Floor.on(rows[0], ">=", FLOOR_SINGLE_PER_S),
+    )
     ftable = Table(title="Fuzzy floors (a measurement: exit status 0 either way)")
     for col in ("floor", "required", "measured", "verdict"):
         ftable.add_column(col, justify="right" if col in ("required", "measured") else "left")
     for f in floors:
         ftable.add_row(
-            f["name"], f">= {f['required']:,.0f}x", f"{f['measured']:,.0f}x", verdict(f["pass"])
+            f.name,
+            f"{f.op} {f.bound:,.0f} {f.unit}",
+            f"{f.measured:,.0f} {f.unit}",
+            verdict(f.passed),
         )
     console.print(ftable)
     console.print(
@@ -348,9 +424,9 @@ def run(console: Console) -> dict[str, Any]:
         f"|dv| median {np.median(diff_v):.3g}, max {diff_v.max():.3g} m/s; |domega| median "
         f"{np.median(diff_w):.3g}, max {diff_w.max():.3g} rad/s (different inference "
         "methods, not expected to agree exactly); firefleet's single and batch paths agree "
-        f"to 1e-12: {single_ok}."
+        f"to 1e-12: {single_ok}; eval_one equals evaluate bit for bit: {kernel_ok}."
     )
-    return {
+    details = {
         "controller": {"inputs": {k: len(v) for k, v in INPUT_MFS.items()}, "rules": len(TABLE_1)},
         "ours_single_s_per_eval": ours_single_s,
         "ours_batch_s_per_eval": ours_batch_s,
@@ -358,6 +434,9 @@ def run(console: Console) -> dict[str, Any]:
         "peer_array_s_per_eval": peer_batch_s,
         "ours_single_evals_per_s": 1 / ours_single_s,
         "ours_batch_evals_per_s": 1 / ours_batch_s,
+        "ours_kernel_s_per_eval": kernel_s,
+        "ours_kernel_evals_per_s": 1 / kernel_s,
+        "kernel_equals_evaluate": kernel_ok,
         "peer_single_evals_per_s": 1 / peer_single_s,
         "peer_array_evals_per_s": 1 / peer_batch_s,
         "speedup_single": ratio_single,
@@ -368,9 +447,9 @@ def run(console: Console) -> dict[str, Any]:
         "output_diff_omega_median": float(np.median(diff_w)),
         "output_diff_omega_max": float(diff_w.max()),
         "single_equals_batch": bool(single_ok),
-        "floors": floors,
         "versions": {"numpy": np.__version__, "scikit-fuzzy": skfuzzy.__version__},
     }
+    return TopicResult(rows, floors, details)
 
 
 if __name__ == "__main__":

@@ -2,14 +2,25 @@
 
 from __future__ import annotations
 
+import argparse
+import io
 import json
+import shlex
+import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
+from rich.console import Console
 
+import firefleet
 from firefleet import builtin_names, load_scenario
 from firefleet.cli import main
+from firefleet.cli._console import claims_table, progress_bar
+from firefleet.cli._main import _parser
+from firefleet.cli._run import report_footer
+from firefleet.outputs import MANIFEST
+from firefleet.report.html import render_index
 
 GOOD = """\
 name: mine
@@ -53,7 +64,7 @@ def test_run_yaml_path_with_seed_and_no_plots(tmp_path: Path) -> None:
     path.write_text(GOOD)
     out = tmp_path / "o"
     assert main(["run", str(path), "--out", str(out), "--seed", "3", "--no-plots"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "result.npz"]
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "metrics.json", "result.npz"]
 
 
 def test_failed_claim_exits_1(tmp_path: Path) -> None:
@@ -134,18 +145,35 @@ def test_list_names_every_builtin(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "report"
-    assert main(["reproduce", "--out", str(out)]) == 0
+    no_data = tmp_path / "no-data"  # section 2.7 without Victoria Park: said, not failed
+    no_data.mkdir()
+    assert main(["reproduce", "--out", str(out), "--data", str(no_data)]) == 0
     index = (out / "index.html").read_text()
     for figure, name in (("Figure 24", "motor-open-loop"), ("Figure 25", "motor-pid")):
         assert figure in index
         assert f'src="{name}/response.png"' in index
         assert (out / name / "response.png").is_file()
         assert (out / name / "metrics.json").is_file()
-    total = sum(
+    # the deliverable's sections in its order, then what goes beyond it
+    heads = [index.index(f"<h2 class=part>{h}") for h in ("2.3 ", "2.6.4.1 ", "2.6.5 ", "2.7 ")]
+    assert heads == sorted(heads) < [index.index("<h2 class=part>Beyond the deliverable")]
+    for run in ("thermal", "stereo-motorcycle", "stereo-uncalibrated", "slam-sim-loop"):
+        assert f'id="{run}"' in index
+        assert (out / run / "metrics.json").is_file()
+    assert 'id="slam-victoria-park"' not in index
+    assert "Victoria Park (slam/victoria_park.txt)" in index  # what was left out, said
+    scenario_claims = sum(
         len(load_scenario(n).claims) for n in builtin_names() if load_scenario(n).reproduces
     )
-    assert total >= 25  # 6 motor claims, 19 path-following claims
+    documents = [json.loads(p.read_text()) for p in out.glob("*/metrics.json")]
+    total = sum(len(d["claims"]) for d in documents)
+    assert total > scenario_claims >= 25
     assert f"{total} of {total} claims passed" in index
+    assert index.count('src="path-straight/controller.png"') == 1  # shown once
+    assert "controller.png" not in index.split('id="path-curved-on"')[1].split("<img")[0]
+    assert "issue" not in index.lower()
+    assert f"Made by: firefleet reproduce --out {out} --data {no_data}." in index
+    assert "Seeds: " in index
     assert "FAILED" not in index
     assert str((out / "index.html").resolve()) in capsys.readouterr().out
 
@@ -168,3 +196,240 @@ def test_run_path_following_writes_per_robot_metrics(
     for png in ("trajectory.png", "velocities.png", "controller.png"):
         assert (out / png).stat().st_size > 10_000
     assert "[robot 1]" in capsys.readouterr().out
+
+
+def test_run_into_a_previous_run_leaves_only_the_new_run(tmp_path: Path) -> None:
+    path = tmp_path / "mine.yaml"
+    path.write_text(GOOD)
+    out = tmp_path / "o"
+    assert main(["run", str(path), "--out", str(out)]) == 0
+    assert (out / "response.png").is_file()
+    assert main(["run", str(path), "--out", str(out), "--no-plots"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "metrics.json", "result.npz"]
+    manifest = json.loads((out / MANIFEST).read_text())
+    assert manifest["files"] == ["metrics.json", "result.npz"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.yaml", "o"]  # no staging left
+
+
+@pytest.mark.parametrize("foreign", ["notes.txt", "sub/data.csv"])
+def test_run_refuses_a_folder_with_files_it_did_not_write(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], foreign: str
+) -> None:
+    path = tmp_path / "mine.yaml"
+    path.write_text(GOOD)
+    out = tmp_path / "o"
+    assert main(["run", str(path), "--out", str(out), "--no-plots"]) == 0
+    (out / foreign).parent.mkdir(exist_ok=True)
+    (out / foreign).write_text("mine, not firefleet's")
+    before = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
+    capsys.readouterr()
+    assert main(["run", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1
+    assert f"--out {out}: holds files firefleet did not write ({foreign})" in err
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == before
+    assert (out / foreign).read_text() == "mine, not firefleet's"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.yaml", "o"]
+
+
+def test_run_into_an_empty_folder_is_fine(tmp_path: Path) -> None:
+    path = tmp_path / "mine.yaml"
+    path.write_text(GOOD)
+    out = tmp_path / "empty"
+    out.mkdir()
+    assert main(["run", str(path), "--out", str(out), "--no-plots"]) == 0
+    assert (out / "metrics.json").is_file()
+
+
+def test_metrics_name_version_commit_seed_and_command(tmp_path: Path) -> None:
+    path = tmp_path / "mine.yaml"
+    path.write_text(GOOD)
+    out = tmp_path / "o"
+    argv = ["run", str(path), "--out", str(out), "--seed", "7", "--no-plots"]
+    assert main(argv) == 0
+    provenance = json.loads((out / "metrics.json").read_text())["provenance"]
+    assert provenance["firefleet_version"] == firefleet.__version__
+    assert provenance["seed"] == 7
+    assert shlex.split(provenance["command"]) == ["firefleet", *argv]
+    root = Path(firefleet.__file__).resolve().parents[2]
+    head = subprocess.run(
+        ["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True
+    )
+    if head.returncode == 0:  # run from a checkout
+        assert provenance["git_commit"].removesuffix("-dirty") == head.stdout.strip()
+    manifest = json.loads((out / MANIFEST).read_text())
+    assert manifest["seed"] == 7
+    assert manifest["git_commit"] == provenance["git_commit"]
+
+
+def test_report_footer_names_version_commit_command_and_seeds() -> None:
+    record = {"git_commit": "0123abc", "command": "firefleet reproduce --out r"}
+    page = render_index([], version="9.8.7", footer=report_footer(record, {"motor-pid": 4}))
+    footer = page[page.rindex("<p class=small>firefleet") :]
+    for fragment in ("firefleet 9.8.7", "0123abc", "firefleet reproduce --out r", "motor-pid 4"):
+        assert fragment in footer
+
+
+@pytest.mark.parametrize(
+    ("written", "seconds"), [("1e3", 1000.0), ("2.5E1", 25.0), ("+1e+1", 10.0), ("1_0", 10)]
+)
+def test_yaml_numbers_as_a_person_writes_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], written: str, seconds: float
+) -> None:
+    path = tmp_path / "n.yaml"
+    path.write_text(GOOD.replace("duration_s: 1.0", f"duration_s: {written}"))
+    assert main(["validate", str(path)]) == 0
+    steps = round(seconds / 0.01)
+    assert f"ok (mine, 1 robot(s), {steps} steps)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("written", [".nan", ".inf", "-.inf"])
+def test_yaml_non_finite_number_names_the_key(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], written: str
+) -> None:
+    path = tmp_path / "n.yaml"
+    path.write_text(GOOD.replace("duration_s: 1.0", f"duration_s: {written}"))
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == f"{path}: duration_s must be a finite number"
+    path.write_text(GOOD.replace("speed_rad_s: 2.0", f"speed_rad_s: {written}"))
+    assert main(["validate", str(path)]) == 2
+    assert "command.speed_rad_s must be a finite number" in capsys.readouterr().err
+
+
+def test_claim_on_a_robot_the_team_lacks_is_a_validation_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "r.yaml"
+    path.write_text(GOOD.replace("value: 0.2}", "value: 0.2, robot: 5}"))
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1
+    assert "robot 5" in err
+    assert "1 robot(s)" in err
+    path.write_text(GOOD.replace("value: 0.2}", "value: 0.2, robot: 1}"))
+    assert main(["validate", str(path)]) == 0
+
+
+def test_bare_firefleet_prints_the_help(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: firefleet")
+    for command in ("list", "run", "validate", "reproduce", "fis", "thermal", "stereo", "slam"):
+        assert command in out
+
+
+def _options() -> list[tuple[str, argparse.Action]]:
+    parser = _parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return [
+        (name, action)
+        for name, command in sub.choices.items()
+        for action in command._actions
+        if action.option_strings and not isinstance(action, argparse._HelpAction)
+    ]
+
+
+def test_every_option_help_says_its_default() -> None:
+    options = _options()
+    assert len(options) > 30
+    for name, action in options:
+        text = action.help or ""
+        assert "default" in text or "required" in text, (name, action.option_strings, text)
+        default = action.default
+        if isinstance(default, int | float) and not isinstance(default, bool):
+            # the number the help names is the number used
+            said = {f"default {default}", f"default {default:g}"}
+            assert any(s in text for s in said), (name, action.option_strings, text)
+
+
+def test_list_prints_one_line_per_scenario_within_80_columns(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", "80")
+    assert main(["list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in lines] == list(builtin_names())
+    assert max(len(line) for line in lines) <= 80
+    assert any("Figure 25" in line for line in lines)
+
+
+def test_run_table_fits_80_columns_and_names_every_metric_whole(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("COLUMNS", "80")
+    out = tmp_path / "coop"
+    assert main(["run", "coop-different-paths", "--out", str(out), "--no-plots"]) == 0
+    printed = capsys.readouterr().out
+    assert max(len(line) for line in printed.splitlines()) <= 80
+    doc = json.loads((out / "metrics.json").read_text())
+    for key in doc:
+        if key not in ("scenario", "provenance", "claims"):
+            assert f" {key} " in printed, key  # whole, not cut to "cross_track_rms_…"
+    assert printed.count("passed") == len(doc["claims"])
+
+
+def test_table_of_a_large_team_shows_min_mean_max_and_claimed_robots(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    values = [("gap_m", [float(k) for k in range(1, 201)])]
+    claims = [{"name": "gap_m[robot 150]", "expected": "<= 200", "passed": True}]
+    Console(width=80).print(claims_table("t", values, claims))
+    printed = capsys.readouterr().out
+    for fragment in ("min of 200", "mean of 200", "max of 200", "[robot 150]", "<= 200"):
+        assert fragment in printed
+    assert "100.5" in printed  # the mean of 1..200
+    assert len(printed.splitlines()) < 20
+
+
+def test_progress_on_a_pipe_is_a_few_plain_lines_on_long_runs() -> None:
+    text = io.StringIO()
+    console = Console(file=text, width=80)  # not a terminal
+    now = [0.0]
+    with progress_bar(console, "sim", clock=lambda: now[0]) as progress:
+        for done in range(1, 1001):
+            now[0] = done * 0.01  # a 10 s run
+            progress(done, 1000)
+    lines = text.getvalue().splitlines()
+    assert lines == ["sim: 25 % (2 s)", "sim: 50 % (5 s)", "sim: 75 % (8 s)", "sim: 100 % (10 s)"]
+    quick = io.StringIO()
+    with progress_bar(Console(file=quick), "sim", clock=lambda: 0.5) as progress:
+        for done in range(1, 11):
+            progress(done, 10)
+    assert quick.getvalue() == ""  # a short run prints nothing
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["run", "motor-pid", "--seed", "abc"], "argument --seed: invalid int value: 'abc'"),
+        (["run"], "the following arguments are required: SCENARIO"),
+        (["nosuch"], "argument COMMAND: invalid choice: 'nosuch'"),
+    ],
+)
+def test_bad_command_line_is_one_line_naming_the_flag(
+    capsys: pytest.CaptureFixture[str], argv: list[str], fragment: str
+) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1, err
+    assert fragment in err
+    assert "--help" in err
+
+
+def test_slam_summary_names_version_commit_seed_and_command(tmp_path: Path) -> None:
+    log = Path(__file__).resolve().parent / "data" / "victoria_park_first1500.txt"
+    out = tmp_path / "s"
+    argv = ["slam", str(log), "--particles", "5", "--seed", "4", "--no-plots", "--out", str(out)]
+    assert main(argv) in (0, 1)
+    provenance = json.loads((out / "summary.json").read_text())["provenance"]
+    assert provenance["seed"] == 4
+    assert provenance["firefleet_version"] == firefleet.__version__
+    assert shlex.split(provenance["command"]) == ["firefleet", *argv]
+    assert json.loads((out / MANIFEST).read_text())["files"] == [
+        "landmarks.csv",
+        "summary.json",
+        "trajectory.csv",
+    ]

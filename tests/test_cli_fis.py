@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from firefleet.cli import main
 from firefleet.control.fuzzy import evaluate, read_fis
@@ -25,7 +27,7 @@ def test_fis_prints_tables_and_writes_plots(
     text = capsys.readouterr().out
     for expected in ("input dist", "output turn", "dist is near", "angle is not left", "0.5"):
         assert expected in text
-    names = sorted(p.name for p in out.iterdir())
+    names = sorted(p.name for p in out.glob("[!.]*"))
     assert names == [
         "mf_angle.png",
         "mf_dist.png",
@@ -114,3 +116,85 @@ def test_fis_bad_options_exit_2(
     assert main(["fis", str(tmp_path / "c.fis"), *extra]) == 2
     assert message in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.fis"]
+
+
+def test_fis_range_beyond_float_resolution_exits_2_before_printing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Range=[0 1e308] printed the tables, then crashed in matplotlib (arange)
+    big = tmp_path / "big.fis"
+    big.write_text(FIS.read_text().replace("Range=[0 4]", "Range=[0 1e308]"))
+    out = tmp_path / "o"
+    assert main(["fis", str(big), "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1, err
+    assert err[0].startswith(f"firefleet: error: {big}:16: [Input1] Range=[0 1e308]: ")
+    assert "within +-1e+15" in err[0]
+    assert "Traceback" not in captured.err
+    assert captured.out == ""  # no tables printed first
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["big.fis"]
+
+
+def test_fis_eval_into_an_existing_folder_exits_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    src = tmp_path / "in.csv"
+    src.write_text("angle,dist\n0.5,1.5\n")
+    folder = tmp_path / "results"
+    folder.mkdir()
+    assert main(["fis", str(FIS), "--eval", str(src), "--out", str(folder)]) == 2
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1, err
+    assert err[0].startswith(f"firefleet: error: --out {folder}: is a folder")
+    assert "Traceback" not in captured.err
+    assert list(folder.iterdir()) == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.csv", "results"]
+
+
+@pytest.mark.parametrize(
+    ("setup", "message"),
+    [
+        ("missing", "no such file"),
+        ("folder", "is a folder, not a CSV file"),
+        ("binary", "not UTF-8 text"),
+    ],
+)
+def test_fis_eval_unreadable_input_exits_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], setup: str, message: str
+) -> None:
+    src = tmp_path / "in.csv"
+    if setup == "folder":
+        src.mkdir()
+    elif setup == "binary":
+        src.write_bytes(b"\xff\xfe\x00dist")
+    dest = tmp_path / "out.csv"
+    assert main(["fis", str(FIS), "--eval", str(src), "--out", str(dest)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert err[0].startswith(f"firefleet: error: --eval {src}: {message}"), err[0]
+    assert not dest.exists()
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(data=st.binary(max_size=200), as_csv=st.booleans())
+def test_fis_random_bytes_exit_2_with_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], data: bytes, as_csv: bool
+) -> None:
+    """Random bytes as the .fis file or as the --eval table: one line, exit 2."""
+    bad = tmp_path / ("in.csv" if as_csv else "r.fis")
+    bad.write_bytes(data)
+    dest = tmp_path / "out.csv"
+    fis = FIS if as_csv else bad
+    capsys.readouterr()
+    code = main(["fis", str(fis), "--eval", str(bad if as_csv else FIS), "--out", str(dest)])
+    err = capsys.readouterr().err
+    if as_csv and code == 0:  # random bytes can be a valid table only by chance
+        return
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
+    assert not dest.exists()

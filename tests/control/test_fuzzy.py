@@ -24,14 +24,10 @@ from firefleet.control.fuzzy import (
     SugenoOutputMf,
     SugenoSystem,
     evaluate,
-    evaluate_csv,
-    fis_text,
     membership,
-    parse_fis,
-    read_fis,
-    write_fis,
 )
 from firefleet.errors import InputError
+from tests.control.fuzzy_systems import every_feature, finite, systems
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "fuzzy"
 
@@ -238,72 +234,8 @@ def test_inputs_are_clipped_to_their_ranges() -> None:
 # ------------------------------------------------------------------ batch = one by one
 
 
-def _every_feature() -> SugenoSystem:
-    """Three inputs, every MF kind, NOT, weights, AND and OR, constant and linear."""
-    mf = MembershipFunction
-    return SugenoSystem(
-        name="everything",
-        inputs=(
-            FuzzyInput(
-                "p",
-                (-3, 3),
-                (
-                    mf("t", "trimf", (-3, -1, 1)),
-                    mf("tr", "trapmf", (-1, 0, 1, 3)),
-                    mf("tv", "trimf", (0, 0, 2)),
-                ),
-            ),
-            FuzzyInput(
-                "q",
-                (0, 5),
-                (
-                    mf("g", "gaussmf", (1, 1)),
-                    mf("b", "gbellmf", (1.5, 2, 4)),
-                    mf("s", "sigmf", (3, 2.5)),
-                ),
-            ),
-            FuzzyInput(
-                "r",
-                (-1, 1),
-                (
-                    mf("sm", "smf", (-0.5, 0.5)),
-                    mf("zm", "zmf", (-0.5, 0.5)),
-                    mf("st", "smf", (0.3, 0.3)),
-                ),
-            ),
-        ),
-        outputs=(
-            FuzzyOutput(
-                "u",
-                (-5, 5),
-                (
-                    SugenoOutputMf("c1", "constant", (-2,)),
-                    SugenoOutputMf("l1", "linear", (0.5, -1, 2, 0.25)),
-                ),
-            ),
-            FuzzyOutput(
-                "v",
-                (0, 1),
-                (
-                    SugenoOutputMf("c2", "constant", (0.7,)),
-                    SugenoOutputMf("c3", "constant", (0.1,)),
-                ),
-            ),
-        ),
-        rules=(
-            Rule((1, 2, 0), (1, 2)),
-            Rule((2, 0, -1), (2, 0), weight=0.7),
-            Rule((3, 3, 2), (0, 1), connective="or"),
-            Rule((-2, 1, 3), (2, 1)),
-            Rule((0, -3, 1), (1, 2), weight=0.3, connective="or"),
-        ),
-        and_method="min",
-        or_method="probor",
-    )
-
-
 def test_batch_equals_one_by_one() -> None:
-    system = _every_feature()
+    system = every_feature()
     rng = np.random.default_rng(3)
     x = rng.uniform([-4, -1, -1.5], [4, 6, 1.5], size=(500, 3))  # some outside the ranges
     batch = evaluate(system, x)
@@ -319,10 +251,10 @@ def test_batch_equals_one_by_one() -> None:
 @settings(max_examples=60, deadline=None)
 @given(st.data())
 def test_batch_equals_one_by_one_random_systems(data: st.DataObject) -> None:
-    system = data.draw(_systems())
+    system = data.draw(systems())
     n_in = len(system.inputs)
     rows = data.draw(
-        st.lists(st.lists(_finite(-12, 12), min_size=n_in, max_size=n_in), min_size=2, max_size=6)
+        st.lists(st.lists(finite(-12, 12), min_size=n_in, max_size=n_in), min_size=2, max_size=6)
     )
     x = np.array(rows)
     np.testing.assert_allclose(
@@ -330,234 +262,11 @@ def test_batch_equals_one_by_one_random_systems(data: st.DataObject) -> None:
     )
 
 
-# ------------------------------------------------------------------ .fis files
-
-
-def test_round_trip_write_read_same_outputs(tmp_path: Path) -> None:
-    system = _every_feature()
-    path = tmp_path / "every.fis"
-    write_fis(system, path)
-    again = read_fis(path)
-    assert again == system
-    x = np.random.default_rng(5).uniform(-4, 6, size=(200, 3))
-    np.testing.assert_allclose(evaluate(again, x), evaluate(system, x), rtol=0, atol=EXACT)
-    assert [p.name for p in tmp_path.iterdir()] == ["every.fis"]  # no temporary left
-
-
-def _finite(lo: float, hi: float) -> st.SearchStrategy[float]:
-    return st.floats(lo, hi, allow_nan=False, allow_infinity=False)
-
-
-@st.composite
-def _mfs(draw: st.DrawFn) -> MembershipFunction:
-    kinds: list[MfKind] = ["trimf", "trapmf", "gaussmf", "gbellmf", "sigmf", "smf", "zmf"]
-    kind = draw(st.sampled_from(kinds))
-    if kind in ("trimf", "trapmf"):
-        p = sorted(
-            draw(
-                st.lists(
-                    _finite(-10, 10),
-                    min_size=3 + (kind == "trapmf"),
-                    max_size=3 + (kind == "trapmf"),
-                )
-            )
-        )
-    elif kind in ("gaussmf", "gbellmf"):
-        extra = 1 if kind == "gaussmf" else 2
-        p = [
-            draw(st.one_of(_finite(0.01, 5), _finite(-5, -0.01))),
-            *draw(st.lists(_finite(-10, 10), min_size=extra, max_size=extra)),
-        ]
-    else:
-        p = draw(st.lists(_finite(-10, 10), min_size=2, max_size=2))
-    return MembershipFunction(draw(st.sampled_from(["A", "mf 2", "Very_Far"])), kind, tuple(p))
-
-
-@st.composite
-def _systems(draw: st.DrawFn) -> SugenoSystem:
-    n_in = draw(st.integers(1, 3))
-    n_out = draw(st.integers(1, 2))
-    inputs = []
-    for i in range(n_in):
-        lo = draw(_finite(-10, 9))
-        inputs.append(
-            FuzzyInput(
-                f"in{i}",
-                (lo, lo + draw(_finite(0.5, 10))),
-                tuple(draw(st.lists(_mfs(), min_size=1, max_size=4))),
-            )
-        )
-    outputs = []
-    for j in range(n_out):
-        mfs = []
-        for _ in range(draw(st.integers(1, 3))):
-            if draw(st.booleans()):
-                mfs.append(SugenoOutputMf("c", "constant", (draw(_finite(-100, 100)),)))
-            else:
-                coeffs = draw(st.lists(_finite(-10, 10), min_size=n_in + 1, max_size=n_in + 1))
-                mfs.append(SugenoOutputMf("l", "linear", tuple(coeffs)))
-        outputs.append(FuzzyOutput(f"out{j}", (-5, 5), tuple(mfs)))
-    rules = []
-    for _ in range(draw(st.integers(1, 5))):
-        ante = [draw(st.integers(-len(v.mfs), len(v.mfs))) for v in inputs]
-        if not any(ante):
-            ante[0] = 1
-        cons = [draw(st.integers(0, len(o.mfs))) for o in outputs]
-        if not any(cons):
-            cons[0] = 1
-        rules.append(
-            Rule(
-                tuple(ante), tuple(cons), draw(_finite(0, 1)), draw(st.sampled_from(["and", "or"]))
-            )
-        )
-    return SugenoSystem(
-        "random",
-        tuple(inputs),
-        tuple(outputs),
-        tuple(rules),
-        and_method=draw(st.sampled_from(["min", "prod"])),
-        or_method=draw(st.sampled_from(["max", "probor"])),
-        defuzz=draw(st.sampled_from(["wtaver", "wtsum"])),
-    )
-
-
-@settings(max_examples=80, deadline=None)
-@given(_systems())
-def test_fis_text_round_trip_property(system: SugenoSystem) -> None:
-    assert parse_fis(fis_text(system)) == system
-
-
-def test_matlab_v2_file_hand_values() -> None:
-    system = read_fis(DATA / "matlab_v2_sugeno.fis")
-    assert [v.name for v in system.inputs] == ["dist", "angle"]
-    assert system.rules[1].weight == 0.5
-    assert system.rules[3].antecedent == (0, -1)
-    # (1.5, 0.5): near = far = 0.25, left = 0.25, not left = 0.75
-    #   speed = (0.25 * 0.2 + 0.5 * 0.25 * (0.25 * 1.5)) / (0.25 + 0.125); turn = 0.5
-    # (3.5, -1): far = 1, left = 1: speed = 0.25 * 3.5, turn = -1
-    # (10, 5) is clipped to (4, 1): speed = 0.25 * 4 (linear sees the clipped input), turn = 1
-    x = np.array([[1.5, 0.5], [3.5, -1.0], [10.0, 5.0]])
-    expected = [[0.096875 / 0.375, 0.5], [0.875, -1.0], [1.0, 1.0]]
-    np.testing.assert_allclose(evaluate(system, x), expected, rtol=0, atol=EXACT)
-    # written back in MATLAB's layout, it is the same file (numbers and all)
-    assert fis_text(system) == (DATA / "matlab_v2_sugeno.fis").read_text()
-
-
-def test_matlab_legacy_file_hand_values() -> None:
-    system = read_fis(DATA / "matlab_legacy_sugeno.fis")
-    assert system.inputs[0].mfs[0].params == (1.0, 2.0, -1.0)  # padding dropped
-    assert system.outputs[0].mfs[1].params == (-1.0,)
-    assert system.outputs[0].range == (0.0, 0.0)
-    assert (system.and_method, system.or_method, system.defuzz) == ("min", "max", "wtsum")
-    # (0, 0): every MF is 1/2; rule 1 (min) 0.5 * z(0, 0) = 0; rule 2 (max) 0.5 * -1
-    # (1, 0.25): low = 1/17, high = 1, rising = 1/(1 + e^-1), falling = 1/(1 + e):
-    #   rule 1 = min(1/17, rising) * (1 + 0.5 * 0.25); rule 2 = max(1, falling) * -1
-    x = np.array([[0.0, 0.0], [1.0, 0.25]])
-    expected = [[-0.5], [1.125 / 17 - 1.0]]
-    np.testing.assert_allclose(evaluate(system, x), expected, rtol=0, atol=EXACT)
-
-
-GOOD = (DATA / "matlab_v2_sugeno.fis").read_text()
-
-
-def _edit(old: str, new: str) -> str:
-    assert old in GOOD
-    return GOOD.replace(old, new, 1)
-
-
-@pytest.mark.parametrize(
-    ("text", "line", "message"),
-    [
-        ("", 1, "missing [System] section"),
-        (GOOD.replace("[System]", "[Sistem]"), 1, "unknown section [Sistem]"),
-        (_edit("Type='sugeno'", "Type='mamdani'"), 3, "only Sugeno"),
-        (
-            GOOD[: GOOD.index("[Input2]")] + GOOD[GOOD.index("[Output1]") :],
-            5,
-            "no [Input2] section",
-        ),
-        (_edit("[Input2]", "[Input3]"), 21, "[Input3] but NumInputs=2"),
-        (GOOD[: GOOD.index("[Rules]")], 7, "NumRules=4 but there is no [Rules] section"),
-        (_edit("Range=[0 4]", "Range=[0 4x]"), 16, "bad number '4x'"),
-        (_edit("Range=[0 4]", "Range=[4 0]"), 16, "min <= max"),
-        (_edit("MF1='near':'trimf',[0 0 2]", "MF1='near':'trimf',[0 2]"), 18, "takes 3 parameters"),
-        (_edit("MF1='near':'trimf',[0 0 2]", "MF1='near':'trimf',[2 0 4]"), 18, "a <= b <= c"),
-        (
-            _edit("MF1='near':'trimf'", "MF1='near':'cosmf'"),
-            18,
-            "unknown membership function type 'cosmf'",
-        ),
-        (
-            _edit("MF1='near':'trimf',[0 0 2]", "MF1=near trimf 0 0 2"),
-            18,
-            "expected 'name':'type',[params]",
-        ),
-        (_edit("NumMFs=2\nMF1='near'", "NumMFs=3\nMF1='near'"), 17, "missing MF3"),
-        (
-            _edit("MF1='slow':'constant',[0.2]", "MF1='slow':'trimf',[0 1 2]"),
-            32,
-            "'constant' or 'linear'",
-        ),
-        (
-            _edit("MF2='fast':'linear',[0.25 0 0]", "MF2='fast':'linear',[0.25 1]"),
-            33,
-            "takes 3 parameter",
-        ),
-        (
-            _edit("1 0, 1 0 (1) : 1", "3 0, 1 0 (1) : 1"),
-            43,
-            "input 1 ('dist') has no membership function 3",
-        ),
-        (
-            _edit("1 0, 1 0 (1) : 1", "1 0, 1 5 (1) : 1"),
-            43,
-            "output 2 ('turn') has no membership function 5",
-        ),
-        (_edit("1 0, 1 0 (1) : 1", "1 0 0, 1 0 (1) : 1"), 43, "3 antecedent indices for 2 inputs"),
-        (
-            _edit("1 0, 1 0 (1) : 1", "1 0, 1 0 (1.5) : 1"),
-            43,
-            "weight must be one number in [0, 1]",
-        ),
-        (_edit("1 0, 1 0 (1) : 1", "1 0, 1 0 (1) : 3"), 43, "connective must be 1 (AND) or 2 (OR)"),
-        (_edit("1 0, 1 0 (1) : 1", "1.2 0, 1 0 (1) : 1"), 43, "hedges are not supported"),
-        (_edit("NumRules=4", "NumRules=5"), 7, "NumRules=5 but [Rules] (line 42) has 4 rule(s)"),
-        (_edit("AndMethod='prod'", "AndMethod='mymin'"), 8, "AndMethod 'mymin' is not supported"),
-        (_edit("Version=2.0", "Version=3.0"), 4, "only .fis versions 1.0 and 2.0"),
-        (_edit("Name='dist'", "Nme='dist'"), 15, "unknown key 'Nme' in [Input1]"),
-        (_edit("NumInputs=2", "NumInputs=two"), 5, "NumInputs must be a whole number"),
-    ],
-)
-def test_malformed_fis_names_the_line(text: str, line: int, message: str) -> None:
-    with pytest.raises(InputError) as info:
-        parse_fis(text, origin="bad.fis")
-    assert str(info.value).startswith(f"bad.fis:{line}: "), str(info.value)
-    assert message in str(info.value)
-
-
-def test_variants_matlab_tolerates() -> None:
-    # rule lines without the comma, without weight and connective; '#' comments; CRLF
-    text = (
-        GOOD.replace("1 0, 1 0 (1) : 1", "1 0 1 0")
-        .replace("0 1, 0 1 (1) : 1", "0 1 0 1 (1) : 1")
-        .replace("[Input1]", "# a comment\n[Input1]")
-        .replace("\n", "\r\n")
-    )
-    assert parse_fis(text) == parse_fis(GOOD)
-
-
-def test_read_fis_missing_file_and_write_into_missing_folder(tmp_path: Path) -> None:
-    with pytest.raises(InputError, match="no such file"):
-        read_fis(tmp_path / "absent.fis")
-    with pytest.raises(InputError, match="cannot write"):
-        write_fis(_every_feature(), tmp_path / "no" / "such" / "x.fis")
-
-
 # ------------------------------------------------------------------ bad input
 
 
 def test_evaluate_rejects_bad_shapes_and_nan() -> None:
-    system = _every_feature()
+    system = every_feature()
     for bad in ([1.0, 2.0], np.zeros((4, 2)), np.zeros((2, 3, 1))):
         with pytest.raises(InputError, match=r"shape \(3,\) or \(N, 3\)"):
             evaluate(system, bad)
@@ -595,35 +304,4 @@ def test_evaluate_rejects_bad_shapes_and_nan() -> None:
 def test_invalid_systems_are_rejected(build: object, message: str) -> None:
     with pytest.raises(InputError, match=None) as info:
         build()  # type: ignore[operator]
-    assert message in str(info.value)
-
-
-# ------------------------------------------------------------------ CSV
-
-
-def test_evaluate_csv_columns_by_name() -> None:
-    system = read_fis(DATA / "matlab_v2_sugeno.fis")
-    table = evaluate_csv(system, "angle,dist\n0.5,1.5\n-1,3.5\n")
-    lines = table.splitlines()
-    assert lines[0] == "speed,turn"
-    got = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
-    np.testing.assert_allclose(got, [[0.096875 / 0.375, 0.5], [0.875, -1.0]], rtol=0, atol=EXACT)
-
-
-@pytest.mark.parametrize(
-    ("text", "message"),
-    [
-        ("", "in.csv:1: empty file"),
-        ("dist\n1\n", "in.csv:1: missing column 'angle'"),
-        ("dist,angle,extra\n1,2,3\n", "in.csv:1: column 'extra' is not an input"),
-        ("dist,angle\n", "in.csv:1: no data rows"),
-        ("dist,angle\n1,x\n", "in.csv:2: column 'angle': bad number 'x'"),
-        ("dist,angle\n1,2\n1\n", "in.csv:3: 1 fields, the header has 2"),
-        ("dist,angle\n1,nan\n", "in.csv:2: column 'angle': nan is not finite"),
-    ],
-)
-def test_evaluate_csv_errors(text: str, message: str) -> None:
-    system = read_fis(DATA / "matlab_v2_sugeno.fis")
-    with pytest.raises(InputError) as info:
-        evaluate_csv(system, text, origin="in.csv")
     assert message in str(info.value)

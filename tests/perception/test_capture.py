@@ -102,7 +102,7 @@ def test_capture_command(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> 
         ["capture", str(video), str(video), "--frames", "2", "--offset", "1", "--out", str(out)]
     )
     assert code == 0
-    names = sorted(p.name for p in out.iterdir())
+    names = sorted(p.name for p in out.glob("[!.]*"))
     assert names == [
         "left_000000.png",
         "left_000001.png",

@@ -33,7 +33,7 @@ def test_stereo_rectified_pair_writes_consistent_outputs(
     args = ["stereo", str(pair[0]), str(pair[1]), "--rectified", "--out", str(out)]
     args += ["--focal-px", str(F_PX), "--baseline-m", str(B_M), "--num-disparities", "32"]
     assert main(args) == 0
-    assert sorted(p.name for p in out.iterdir()) == sorted(
+    assert sorted(p.name for p in out.glob("[!.]*")) == sorted(
         [
             "rectified_left.png",
             "rectified_right.png",

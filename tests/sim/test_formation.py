@@ -259,7 +259,7 @@ command: {kind: formation, %s}
         ("failure: {robot: 3, time_s: 1.0}", "failure.robot = 3, but the team has 2 robot(s)"),
         ("formed_by_s: 9.0", "formed_by_s = 9.0 s is after the end of the run"),
         ("alpha_m: -2.0", "alpha_m must be > 0, got -2.0"),
-        ("alpha_m: .nan", "not plain data"),
+        ("alpha_m: .nan", "alpha_m must be a finite number"),
         ("law: circular", "law: Input should be 'deliverable' or 'regular'"),
         ("obstacles: [{x_m: 0, y_m: 0, radius_m: 0}]", "radius_m must be > 0"),
         ("leader: {waypoints_m: []}", "waypoints_m must list at least one point"),

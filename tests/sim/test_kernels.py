@@ -11,7 +11,7 @@ from firefleet import builtin_names, load_scenario, simulate
 from firefleet.control.path_following import PathFollowingController, controller_inputs
 from firefleet.models.kinematics import RobotGeometry, body_to_wheels
 from firefleet.planning.trajectory import Trajectory
-from firefleet.scenarios.schema import PathFollowing, WheelSpeedStep
+from firefleet.scenarios.schema import PathFollowing, Scenario, WheelSpeedStep
 from firefleet.sim._kernels import PARALLEL_MIN_ROBOTS, run_motor_team
 from firefleet.sim.drive import (
     discretise_drive,
@@ -155,10 +155,51 @@ def _hex(values: list[str]) -> np.ndarray:
     return np.array([float.fromhex(v) for v in values])
 
 
+# coop-different-paths' paths 1 and 2 as they were when the numbers above were pinned
+# (main at e41e726); the scenario's paths now leave their start climbing (Figure 34).
+MAIN_PATHS_1_2 = (
+    (
+        (
+            11.430300023807044,
+            -7.1444037271913805e-06,
+            0.0007148985522853329,
+            -0.02387577949400721,
+            0.0022923670124682777,
+            -5.8767259772699115e-05,
+        ),
+        15.59302128317522,
+    ),
+    (
+        (
+            6.720700008344271,
+            -2.503912445825743e-06,
+            0.0002505174609547687,
+            -0.008363205789802467,
+            0.0006313999745830191,
+            -1.2724544451591667e-05,
+        ),
+        19.838253962570413,
+    ),
+)
+
+
+def _coop_as_on_main() -> Scenario:
+    from firefleet.planning.paths import PolynomialPath
+
+    scn = load_scenario("coop-different-paths")
+    cmd = scn.command
+    assert isinstance(cmd, PathFollowing)
+    old = tuple(
+        PolynomialPath(coefficients=c, x_start_m=0.01, x_end_m=x_end) for c, x_end in MAIN_PATHS_1_2
+    )
+    paths = (*old, cmd.paths[2])
+    return dataclasses.replace(scn, command=dataclasses.replace(cmd, paths=paths), claims=())
+
+
 def test_path_following_kernel_equals_mains_kernel_bit_for_bit() -> None:
     # the same operations in the same order as the kernel it replaced: the same doubles,
     # 80 s of three robots with quantised encoders (a changed bit would grow)
-    res = simulate(load_scenario("coop-different-paths"))
+    res = simulate(_coop_as_on_main())
     np.testing.assert_array_equal(res.pose[-1].ravel(), _hex(MAIN_POSE_END))
     np.testing.assert_array_equal(res.extra["odometry_pose"][-1].ravel(), _hex(MAIN_ODOMETRY_END))
     np.testing.assert_array_equal(res.voltage_v[4000].ravel(), _hex(MAIN_VOLTAGE_4000))

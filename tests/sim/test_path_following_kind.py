@@ -29,6 +29,7 @@ def test_team_run_equals_robots_run_one_by_one() -> None:
             ideal,
             poses=(ideal.poses[i],),
             command=dataclasses.replace(cmd, paths=(cmd.paths[i],)),
+            claims=(),  # the team's claims name robots 2 and 3
         )
         single = simulate(alone)
         np.testing.assert_array_equal(single.pose[:, 0], together.pose[:, i])

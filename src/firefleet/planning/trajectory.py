@@ -88,7 +88,10 @@ class Trajectory:
             raise InputError("a trajectory needs at least one path")
         if not (math.isfinite(duration_s) and duration_s > 0):
             raise InputError(f"duration_s must be > 0, got {duration_s}")
-        points = np.stack([p.sample(pieces) for p in paths])
+        # a path shared by several robots (the same path three times, a large team on a
+        # few routes) is sampled once: the points are the same bits either way
+        samples = {path: path.sample(pieces) for path in dict.fromkeys(paths)}
+        points = np.stack([samples[p] for p in paths])
         spacing = np.array([p.length_m / pieces for p in paths])
         return cls(points=points, period_s=duration_s / pieces, spacing_m=spacing)
 

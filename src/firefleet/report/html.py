@@ -40,6 +40,8 @@ class ReportEntry:
         The command line that makes this run again (default ``firefleet run NAME``).
     links : tuple of str
         Files inside ``folder`` the entry links to (the run's data).
+    captions : mapping of str to str
+        A caption for some of the figures, by file name.
     """
 
     name: str
@@ -51,6 +53,7 @@ class ReportEntry:
     document: dict[str, Any]
     command: str = ""
     links: tuple[str, ...] = ("metrics.json", "result.npz")
+    captions: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -71,6 +74,8 @@ class ReportRun:
         The files that are figures, in the order the report shows them.
     document : dict
         ``{"scenario": name, "claims": [...], **metrics}``, written as ``metrics.json``.
+    captions : mapping of str to str
+        A caption for some of the figures, by file name.
     """
 
     name: str
@@ -81,6 +86,7 @@ class ReportRun:
     files: Mapping[str, bytes]
     figures: tuple[str, ...]
     document: dict[str, Any] = field(default_factory=dict)
+    captions: Mapping[str, str] = field(default_factory=dict)
 
 
 SECTIONS: tuple[tuple[str, str, tuple[int, int]], ...] = (
@@ -106,7 +112,8 @@ section { border-top: 1px solid #ccc; margin-top: 2em; padding-top: 0.5em; }
 .scroll { overflow-x: auto; max-width: 100%; }
 table { border-collapse: collapse; margin: 0.8em 0; }
 th, td { border: 1px solid #ccc; padding: 0.3em 0.7em; text-align: left; vertical-align: top; }
-td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+.nw { white-space: nowrap; }
 td.src { min-width: 12em; }
 .pass { color: #11772d; font-weight: 600; } .fail { color: #b3141b; font-weight: 600; }
 blockquote { color: #555; border-left: 3px solid #ccc; margin: 0.5em 0; padding-left: 1em; }
@@ -189,6 +196,13 @@ def format_value(value: Any) -> str:
     return str(value)
 
 
+def _cell(value: Any) -> str:
+    """A value as an HTML table cell: a list wraps between its numbers, never inside one."""
+    if isinstance(value, list) and len(value) > 1:
+        return ", ".join(f"<span class=nw>{html.escape(format_value(v))}</span>" for v in value)
+    return f"<span class=nw>{html.escape(format_value(value))}</span>"
+
+
 def _has_undefined(value: Any) -> bool:
     if isinstance(value, float):
         return math.isnan(value)
@@ -206,7 +220,7 @@ def _section(entry: ReportEntry, shown_at: dict[str, str]) -> str:
         "<td class={}>{}</td><td class=src>{}</td></tr>".format(
             esc(c["name"]),
             esc(str(c["expected"])),
-            esc(format_value(c["measured"])),
+            _cell(c["measured"]),
             "pass" if c["passed"] else "fail",
             "passed" if c["passed"] else "FAILED",
             esc(c.get("source", "")),
@@ -215,7 +229,7 @@ def _section(entry: ReportEntry, shown_at: dict[str, str]) -> str:
     )
     metrics = {k: v for k, v in doc.items() if k not in ("scenario", "claims", "provenance")}
     metric_rows = "".join(
-        f"<tr><td>{esc(k)}</td><td class=num>{esc(format_value(v))}</td></tr>"
+        f"<tr><td>{esc(k)}</td><td class=num>{_cell(v)}</td></tr>"
         for k, v in metrics.items()
         if not isinstance(v, dict)
     )
@@ -232,8 +246,11 @@ def _section(entry: ReportEntry, shown_at: dict[str, str]) -> str:
             )
             continue
         shown_at.setdefault(f, entry.name)
+        caption = entry.captions.get(f)
         figs.append(
-            f'<p><img src="{esc(entry.folder)}/{esc(f)}" alt="{esc(entry.name)} {esc(f)}"></p>'
+            f'<p><img src="{esc(entry.folder)}/{esc(f)}" alt="{esc(entry.name)} {esc(f)}">'
+            + (f"<br><span class=small>{esc(caption)}</span>" if caption else "")
+            + "</p>"
         )
     command = entry.command or f"firefleet run {entry.name}"
     links = "".join(

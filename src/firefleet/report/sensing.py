@@ -304,10 +304,13 @@ def _calibrated_run(
             "(Middlebury's bad-2.0)",
         ),
     )
+    lo, hi = (float(v) for v in np.percentile(gt[np.isfinite(gt)], [1, 99]))
     files = {
         "rectified_pair.png": rectified_pair_png(left, right),
-        "disparity.png": disparity_png(result.disparity),
-        "disparity_truth.png": disparity_png(np.where(np.isfinite(gt), gt, np.nan)),
+        "disparity.png": disparity_png(result.disparity, vmin=lo, vmax=hi),
+        "disparity_truth.png": disparity_png(
+            np.where(np.isfinite(gt), gt, np.nan), vmin=lo, vmax=hi
+        ),
     }
     return ReportRun(
         name="stereo-motorcycle",
@@ -322,6 +325,11 @@ def _calibrated_run(
         files=files,
         figures=tuple(files),
         document=metrics_document("stereo-motorcycle", claims, metrics),
+        captions={
+            "disparity.png": "firefleet's disparity (near is red; black: no value)",
+            "disparity_truth.png": "the ground-truth disparity, same colours "
+            "(black: no ground truth)",
+        },
     )
 
 

@@ -16,6 +16,7 @@ import dataclasses
 import difflib
 import json
 import math
+import re
 import types
 import typing
 from collections.abc import Sequence
@@ -507,6 +508,11 @@ class Scenario:
                     f"claims: unknown metric {claim.metric!r} for a {self.command.kind} "
                     f"scenario{_suggest(claim.metric, known)}; known: {', '.join(known)}"
                 )
+            if claim.robot is not None and claim.robot > self.n_robots:
+                raise InputError(
+                    f"claims: robot {claim.robot} in the claim on {claim.metric}, but the "
+                    f"scenario has {self.n_robots} robot(s) (poses)"
+                )
 
     @property
     def n_robots(self) -> int:
@@ -640,6 +646,8 @@ def parse_scenario(data: Any, *, origin: str = "scenario") -> Scenario:
     """
     if not isinstance(data, dict):
         raise InputError(f"{origin}: a scenario must be a mapping, got {type(data).__name__}")
+    if (where := _non_finite(data)) is not None:
+        raise InputError(f"{origin}: {where} must be a finite number")
     try:
         text = json.dumps(data, allow_nan=False)
     except (TypeError, ValueError) as exc:
@@ -654,7 +662,36 @@ def parse_scenario(data: Any, *, origin: str = "scenario") -> Scenario:
 
 
 class _UniqueKeyLoader(yaml.SafeLoader):
-    """YAML safe loader that rejects duplicate keys (PyYAML keeps the last silently)."""
+    """YAML safe loader that rejects duplicate keys (PyYAML keeps the last silently).
+
+    It also reads numbers as a person writes them: ``1e3`` and ``2E-4`` are floats (YAML
+    1.1, PyYAML's dialect, needs ``1.0e+3`` and reads ``1e3`` as a string).
+    """
+
+
+# YAML 1.2's core-schema float, tried after PyYAML's own int and float resolvers (an int
+# stays an int): it adds exponents without a dot or a sign, such as 1e3.
+_UniqueKeyLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:\.[0-9]+|[0-9][0-9_]*(?:\.[0-9_]*)?)(?:[eE][-+]?[0-9]+)?$"),
+    list("-+0123456789."),
+)
+
+
+def _non_finite(data: Any, where: str = "") -> str | None:
+    """The key path of the first NaN or infinite number in ``data``, or None."""
+    if isinstance(data, float) and not math.isfinite(data):
+        return where
+    items: Any = ()
+    if isinstance(data, dict):
+        items = ((f"{where}.{k}" if where else str(k), v) for k, v in data.items())
+    elif isinstance(data, list | tuple):
+        items = ((f"{where}[{i}]", v) for i, v in enumerate(data))
+    for path, value in items:
+        found = _non_finite(value, path)
+        if found is not None:
+            return found
+    return None
 
 
 def _construct_mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -> dict[Any, Any]:
