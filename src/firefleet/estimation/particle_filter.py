@@ -83,14 +83,6 @@ def compose(poses: ArrayLike, delta: ArrayLike) -> FloatArray:
     ndarray, shape (..., 3)
         ``(x + cos(theta) dx - sin(theta) dy, y + sin(theta) dx + cos(theta) dy,
         wrap(theta + dtheta))``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation import particle_filter as pf
-    >>> pose = pf.compose([1.0, 2.0, np.pi / 2], [1.0, 0.0, np.pi / 2])  # 1 m ahead, facing +y
-    >>> pose.round(4).tolist()  # the heading pi wraps to -pi
-    [1.0, 3.0, -3.1416]
     """
     p = np.asarray(poses, dtype=np.float64)
     d = np.asarray(delta, dtype=np.float64)
@@ -114,14 +106,6 @@ def relative_pose(a: ArrayLike, b: ArrayLike) -> FloatArray:
     -------
     ndarray, shape (..., 3)
         dx, dy [m] in the frame of ``a``, dtheta [rad] wrapped to [-pi, pi).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation import particle_filter as pf
-    >>> a, delta = np.array([1.0, 2.0, 0.3]), np.array([0.5, -0.2, 0.1])
-    >>> np.allclose(pf.relative_pose(a, pf.compose(a, delta)), delta)
-    True
     """
     pa = np.asarray(a, dtype=np.float64)
     pb = np.asarray(b, dtype=np.float64)
@@ -151,13 +135,6 @@ class OdometryNoise:
         Standard deviation added to dx and dy each step [m].
     floor_sigma_theta_rad : float
         Standard deviation added to dtheta each step [rad].
-
-    Examples
-    --------
-    >>> from firefleet.estimation import OdometryNoise
-    >>> noise = OdometryNoise(wheel_variance_m=1e-4)
-    >>> noise.floor_sigma_xy_m, noise.floor_sigma_theta_rad
-    (0.001, 0.001)
     """
 
     wheel_variance_m: float = 1e-4
@@ -192,17 +169,6 @@ def odometry_covariance(
         ``dx = ds cos(dtheta/2)``, ``dy = ds sin(dtheta/2)``, ``dtheta = (s_R - s_L)/L``,
         ``ds = (s_R + s_L)/2`` with respect to the wheel travels (s_R, s_L)
         (Siegwart and Nourbakhsh 2004, eq. 5.9 and 5.10).
-
-    Examples
-    --------
-    >>> from firefleet.estimation import OdometryNoise
-    >>> from firefleet.estimation.particle_filter import odometry_covariance
-    >>> from firefleet.models import RobotGeometry
-    >>> noise = OdometryNoise(1e-4, floor_sigma_xy_m=0.0, floor_sigma_theta_rad=0.0)
-    >>> cov = odometry_covariance([[1.0, 0.0, 0.0]], RobotGeometry(axle_length_m=0.2), noise)
-    >>> # 1 m straight: var(dx) = k^2 / 2, var(dtheta) = 2 k^2 / L^2
-    >>> cov.shape, round(float(cov[0, 0, 0]), 8), round(float(cov[0, 2, 2]), 8)
-    ((1, 3, 3), 5e-05, 0.005)
     """
     d = as_float_array(delta, "delta", (None, 3))
     L = geometry.axle_length_m
@@ -256,16 +222,6 @@ def sample_odometry(
     -------
     ndarray, shape (P, 3)
         ``compose(poses, delta + e)``, ``e ~ N(0, cov)`` drawn per particle.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import sample_odometry
-    >>> poses = np.zeros((1000, 3))
-    >>> delta, cov = np.array([1.0, 0.0, 0.0]), np.eye(3) * 1e-4
-    >>> moved = sample_odometry(poses, delta, cov, np.random.default_rng(0))
-    >>> moved.shape, (np.round(moved.mean(axis=0), 2) + 0.0).tolist()
-    ((1000, 3), [1.0, 0.0, 0.0])
     """
     noise = rng.standard_normal(poses.shape) @ _sqrt_psd(cov).T
     return compose(poses, delta + noise)
@@ -288,14 +244,6 @@ def predict_range_bearing(poses: ArrayLike, landmarks: ArrayLike) -> FloatArray:
     -------
     ndarray, shape (..., 2)
         Range [m] and bearing [rad] (relative to the heading, wrapped to [-pi, pi)).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import predict_range_bearing
-    >>> z = predict_range_bearing([[0.0, 0.0, 0.0], [0.0, 0.0, np.pi / 2]], [3.0, 4.0])
-    >>> z.round(4).tolist()  # range 5, bearing atan2(4, 3) less the heading
-    [[5.0, 0.9273], [5.0, -0.6435]]
     """
     p = np.asarray(poses, dtype=np.float64)
     m = np.asarray(landmarks, dtype=np.float64)
@@ -319,13 +267,6 @@ def range_bearing_jacobians(
         ``d(range, bearing) / d(x, y, theta)``.
     h_landmark : ndarray, shape (..., 2, 2)
         ``d(range, bearing) / d(m_x, m_y)`` (equal to minus the pose's first two columns).
-
-    Examples
-    --------
-    >>> from firefleet.estimation.particle_filter import range_bearing_jacobians
-    >>> h_pose, h_landmark = range_bearing_jacobians([0.0, 0.0, 0.0], [3.0, 4.0])
-    >>> h_landmark.round(4).tolist(), h_pose[1].tolist()
-    ([[0.6, 0.8], [-0.16, 0.12]], [0.16, -0.12, -1.0])
     """
     p = np.asarray(poses, dtype=np.float64)
     m = np.asarray(landmarks, dtype=np.float64)
@@ -359,14 +300,6 @@ def range_bearing_log_likelihood(z: ArrayLike, z_pred: ArrayLike, cov: ArrayLike
     -------
     ndarray, shape (...)
         ``log N(z - z_pred; 0, cov)``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import range_bearing_log_likelihood
-    >>> ll = range_bearing_log_likelihood([5.0, 0.1], [5.0, 0.1], np.eye(2))
-    >>> round(float(ll), 4), round(float(-np.log(2 * np.pi)), 4)  # at the mean of N(0, I_2)
-    (-1.8379, -1.8379)
     """
     nu = innovation(np.asarray(z, dtype=np.float64), np.asarray(z_pred, dtype=np.float64))
     c = np.asarray(cov, dtype=np.float64)
@@ -391,17 +324,6 @@ def bearing_log_likelihood(
     -------
     ndarray, shape (...)
         ``log N(wrap(bearing - bearing_pred); 0, sigma^2)``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import bearing_log_likelihood
-    >>> # the error wraps: 3.1 and -3.1 rad are 0.083 rad apart
-    >>> ll = bearing_log_likelihood(3.1, -3.1, 0.1)
-    >>> e = 2 * np.pi - 6.2
-    >>> expected = -0.5 * (e / 0.1) ** 2 - np.log(0.1 * np.sqrt(2 * np.pi))
-    >>> round(float(ll), 4), round(float(expected), 4)
-    (1.0377, 1.0377)
     """
     e = wrap_angle(np.asarray(bearing, dtype=np.float64) - np.asarray(bearing_pred))
     s = np.asarray(sigma_rad, dtype=np.float64)
@@ -440,29 +362,13 @@ def mahalanobis2(nu: FloatArray, inv: FloatArray) -> FloatArray:
 
 
 def normalise_log_weights(log_w: FloatArray) -> FloatArray:
-    """Normalised weights ``(P,)`` from log weights (shifted by the maximum first).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import normalise_log_weights
-    >>> normalise_log_weights(np.log([1.0, 3.0]) - 1000.0).round(12).tolist()
-    [0.25, 0.75]
-    """
+    """Normalised weights ``(P,)`` from log weights (shifted by the maximum first)."""
     w = np.exp(log_w - np.max(log_w))
     return np.asarray(w / w.sum(), dtype=np.float64)
 
 
 def effective_sample_size(weights: FloatArray) -> float:
-    """Effective sample size ``1 / sum(w_i^2)`` of normalised weights ``(P,)``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import effective_sample_size
-    >>> effective_sample_size(np.full(4, 0.25)), effective_sample_size(np.array([1.0, 0.0, 0.0]))
-    (4.0, 1.0)
-    """
+    """Effective sample size ``1 / sum(w_i^2)`` of normalised weights ``(P,)``."""
     return float(1.0 / np.sum(weights * weights))
 
 
@@ -483,13 +389,6 @@ def low_variance_resample(weights: FloatArray, rng: np.random.Generator) -> IntA
     -------
     ndarray of int64, shape (P,)
         Indices of the particles to keep, ascending.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import low_variance_resample
-    >>> low_variance_resample(np.array([0.5, 0.25, 0.25, 0.0]), np.random.default_rng(0)).tolist()
-    [0, 0, 1, 2]
     """
     n = weights.shape[0]
     cdf = np.cumsum(weights)
@@ -514,15 +413,6 @@ def weighted_pose_mean(poses: FloatArray, weights: FloatArray) -> tuple[FloatArr
         x, y [m] weighted means; theta = atan2 of the weighted mean of sin and cos.
     cov : ndarray, shape (3, 3)
         Weighted covariance, heading deviations wrapped about the mean.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import weighted_pose_mean
-    >>> poses = np.array([[0.0, 0.0, 3.0], [2.0, 0.0, -3.0]])  # headings either side of pi
-    >>> mean, cov = weighted_pose_mean(poses, np.array([0.5, 0.5]))
-    >>> round(float(mean[0]), 4), round(float(abs(mean[2])), 4), round(float(np.pi), 4)
-    (1.0, 3.1416, 3.1416)
     """
     mean = np.empty(3)
     mean[:2] = weights @ poses[:, :2]
@@ -539,16 +429,7 @@ def weighted_pose_mean(poses: FloatArray, weights: FloatArray) -> tuple[FloatArr
 def gaussian_particles(
     pose: ArrayLike, cov: ArrayLike, n_particles: int, rng: np.random.Generator
 ) -> FloatArray:
-    """``n_particles`` poses drawn from ``N(pose, cov)`` (a known start), shape (P, 3).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import gaussian_particles
-    >>> p = gaussian_particles([1.0, 2.0, 0.0], np.eye(3) * 1e-6, 500, np.random.default_rng(0))
-    >>> p.shape, np.round(p.mean(axis=0), 2).tolist()
-    ((500, 3), [1.0, 2.0, 0.0])
-    """
+    """``n_particles`` poses drawn from ``N(pose, cov)`` (a known start), shape (P, 3)."""
     mu = as_float_array(pose, "pose", (3,))
     c = as_float_array(cov, "cov", (3, 3))
     if n_particles < 1:
@@ -571,14 +452,6 @@ def uniform_particles(bounds: ArrayLike, n_particles: int, rng: np.random.Genera
     Returns
     -------
     ndarray, shape (P, 3)
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation.particle_filter import uniform_particles
-    >>> p = uniform_particles([0.0, 10.0, -5.0, 5.0], 100, np.random.default_rng(0))
-    >>> p.shape, bool(p[:, 0].min() >= 0.0 and p[:, 0].max() < 10.0 and abs(p[:, 2]).max() <= np.pi)
-    ((100, 3), True)
     """
     b = as_float_array(bounds, "bounds", (4,))
     if not (b[0] < b[1] and b[2] < b[3]):
@@ -654,18 +527,6 @@ class MclResult:
     resampled : ndarray of bool, shape (T,)
     particles : ndarray, shape (P, 3)
         The final particles.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.estimation import run_mcl
-    >>> odo, odo_cov = np.array([[1.0, 0.0, 0.0]]), np.eye(3)[None] * 1e-4
-    >>> obs = dict(obs_step=[1], obs_landmark=[0], obs_z=[[1.0, 0.0]], obs_cov=[np.eye(2) * 0.01])
-    >>> p = np.zeros((50, 3))
-    >>> landmark_map, rng = {0: (2.0, 0.0)}, np.random.default_rng(0)
-    >>> result = run_mcl(odo, odo_cov, **obs, landmark_map=landmark_map, particles=p, rng=rng)
-    >>> result.mean.shape, result.cov.shape, result.particles.shape
-    ((2, 3), (2, 3, 3), (50, 3))
     """
 
     mean: FloatArray
@@ -726,12 +587,10 @@ def run_mcl(
     --------
     >>> import numpy as np
     >>> from firefleet.estimation import run_mcl
-    >>> odo, odo_cov = np.array([[1.0, 0.0, 0.0]]), np.eye(3)[None] * 1e-4
     >>> obs = dict(obs_step=[1], obs_landmark=[0], obs_z=[[1.0, 0.0]], obs_cov=[np.eye(2) * 0.01])
-    >>> p = np.zeros((200, 3))
-    >>> landmark_map, rng = {0: (2.0, 0.0)}, np.random.default_rng(0)
-    >>> result = run_mcl(odo, odo_cov, **obs, landmark_map=landmark_map, particles=p, rng=rng)
-    >>> (np.round(result.mean[-1], 1) + 0.0).tolist()  # 1 m driven, 1 m short of (2, 0)
+    >>> rng, odo_cov, p = np.random.default_rng(0), np.eye(3)[None] * 1e-4, np.zeros((200, 3))
+    >>> r = run_mcl([[1.0, 0, 0]], odo_cov, **obs, landmark_map={0: (2, 0)}, particles=p, rng=rng)
+    >>> (np.round(r.mean[-1], 1) + 0.0).tolist()  # 1 m driven, the landmark 1 m ahead at (2, 0)
     [1.0, 0.0, 0.0]
     """
     prm = params or MclParams()
