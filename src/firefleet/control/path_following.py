@@ -61,6 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 from firefleet.control.fuzzy import SugenoSystem, evaluate, read_fis
 from firefleet.control.fuzzy_kernel import FisTables, compile_system
 from firefleet.errors import InputError, as_float_array
+from firefleet.models.kinematics import wrap_angle
 
 if TYPE_CHECKING:
     from firefleet.scenarios.schema import PathFollowing
@@ -124,8 +125,7 @@ def controller_inputs(pose: ArrayLike, desired: ArrayLike) -> FloatArray:
     x_err = np.cos(d[:, 2]) * dx + np.sin(d[:, 2]) * dy
     y_err = -np.sin(phi) * dx + np.cos(phi) * dy
     raw = np.arctan2(dy, dx) - phi
-    wrapped = (raw + np.pi) % (2.0 * np.pi) - np.pi
-    alpha = np.where(d_rp > 0.0, np.where(wrapped >= np.pi, wrapped - 2.0 * np.pi, wrapped), 0.0)
+    alpha = np.where(d_rp > 0.0, wrap_angle(raw), 0.0)
     return np.stack([d_rp, x_err, y_err, alpha], axis=1)
 
 

@@ -30,19 +30,17 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet.models.kinematics import wrap_angle_one
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
 _LOG_2PI = math.log(2.0 * math.pi)
-_TWO_PI = 2.0 * math.pi
 
 
-@numba.njit(cache=True, inline="always")
-def _wrap(a: float) -> float:  # pragma: no cover (compiled)
-    """Angle wrapped to [-pi, pi), as ``firefleet.models.kinematics.wrap_angle``."""
-    w = (a + math.pi) % _TWO_PI - math.pi
-    return w - _TWO_PI if w >= math.pi else w
+_wrap = wrap_angle_one
+"""Angle wrapped to [-pi, pi): the one compiled definition, models.kinematics's."""
 
 
 @numba.njit(cache=True)
