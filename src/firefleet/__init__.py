@@ -3,6 +3,15 @@
 The public surface is small; the subpackages hold the rest:
 :mod:`firefleet.models` (plants), :mod:`firefleet.control` (controllers),
 :mod:`firefleet.scenarios` (experiments), :mod:`firefleet.sim` (the simulator).
+
+Examples
+--------
+>>> import firefleet
+>>> scenario = firefleet.load_scenario("motor-open-loop")  # one of builtin_names()
+>>> result = firefleet.simulate(scenario, record_every=100)
+>>> metrics = firefleet.compute_metrics(result)
+>>> all(claim.holds(metrics[claim.metric]) for claim in scenario.claims)
+True
 """
 
 from firefleet.errors import InputError

@@ -18,7 +18,14 @@ __all__ = ["InputError", "as_float_array", "check_fields"]
 
 
 class InputError(ValueError):
-    """Bad input: the message names what is wrong and what was expected."""
+    """Bad input: the message names what is wrong and what was expected.
+
+    Examples
+    --------
+    >>> from firefleet.errors import InputError
+    >>> issubclass(InputError, ValueError)
+    True
+    """
 
 
 def as_float_array(
@@ -44,6 +51,17 @@ def as_float_array(
     ------
     InputError
         If the number of axes or a fixed axis length differ, or a value is not finite.
+
+    Examples
+    --------
+    >>> from firefleet.errors import InputError, as_float_array
+    >>> as_float_array([[1, 2, 3]], "pose", (None, 3)).dtype
+    dtype('float64')
+    >>> try:
+    ...     as_float_array([1.0, 2.0], "pose", (None, 3))
+    ... except InputError as error:
+    ...     print(error)
+    pose must have shape (N, 3), got (2,)
     """
     arr = np.asarray(value, dtype=np.float64)
     if arr.ndim != len(shape) or any(
@@ -72,6 +90,19 @@ def check_fields(
     InputError
         If a field in ``positive`` is not a finite number > 0, or one in
         ``non_negative`` is not a finite number >= 0.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> from firefleet.errors import InputError, check_fields
+    >>> @dataclass
+    ... class Wheel:
+    ...     radius_m: float
+    >>> try:
+    ...     check_fields(Wheel(radius_m=-0.1), "robot", positive=("radius_m",))
+    ... except InputError as error:
+    ...     print(error)
+    robot.radius_m must be > 0, got -0.1
     """
     prefix = f"{section}." if section else ""
     for names, ok, bound in ((positive, float.__gt__, "> 0"), (non_negative, float.__ge__, ">= 0")):

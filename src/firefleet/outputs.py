@@ -45,7 +45,20 @@ def _finite_or_none(value: Any) -> Any:
 
 
 def json_text(document: Any) -> str:
-    """JSON text of ``document`` with non-finite numbers written as ``null``."""
+    """JSON text of ``document`` with non-finite numbers written as ``null``.
+
+    Examples
+    --------
+    >>> from firefleet.outputs import json_text
+    >>> print(json_text({"rise_time_s": float("inf"), "robots": [1.0, float("nan")]}), end="")
+    {
+      "rise_time_s": null,
+      "robots": [
+        1.0,
+        null
+      ]
+    }
+    """
     return json.dumps(_finite_or_none(document), indent=2, allow_nan=False) + "\n"
 
 
@@ -163,6 +176,20 @@ def staged_dir(
         If ``destination`` is not a folder, holds a file no firefleet run wrote (checked
         before the block runs and again before the swap; such files are never deleted),
         or cannot be created.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from firefleet.outputs import staged_dir
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> out = pathlib.Path(folder.name) / "run"
+    >>> with staged_dir(out) as stage:
+    ...     _ = (stage / "metrics.json").write_text("{}")
+    ...     print(out.exists())
+    False
+    >>> sorted(p.name for p in out.iterdir())  # the outputs and the run's manifest
+    ['.firefleet-run.json', 'metrics.json']
+    >>> folder.cleanup()
     """
     dest = Path(destination)
     _check_ours(dest)
@@ -210,6 +237,17 @@ def write_text_atomic(dest: str | Path, text: str) -> None:
     ------
     InputError
         If the folder cannot be written to.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from firefleet.outputs import write_text_atomic
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(folder.name) / "note.txt"
+    >>> write_text_atomic(path, "hello")
+    >>> path.read_text(), [p.name for p in path.parent.iterdir()]
+    ('hello', ['note.txt'])
+    >>> folder.cleanup()
     """
     dest = Path(dest)
     try:

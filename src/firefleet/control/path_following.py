@@ -80,7 +80,14 @@ MAIN_OUTPUTS = ("v", "omega")
 
 
 def builtin_fis_path(name: str) -> Path:
-    """Path of a shipped ``.fis`` file: ``"path_following"`` or ``"lambda_correction"``."""
+    """Path of a shipped ``.fis`` file: ``"path_following"`` or ``"lambda_correction"``.
+
+    Examples
+    --------
+    >>> from firefleet.control.path_following import builtin_fis_path
+    >>> builtin_fis_path("lambda_correction").name
+    'lambda_correction.fis'
+    """
     path = Path(str(resources.files("firefleet.control").joinpath(f"data/{name}.fis")))
     if not path.is_file():
         raise InputError(f"no built-in fuzzy system {name!r}")
@@ -101,6 +108,13 @@ def controller_inputs(pose: ArrayLike, desired: ArrayLike) -> FloatArray:
     -------
     ndarray, shape (N, 4)
         ``D_rp`` [m], ``x_err`` [m], ``y_err`` [m], ``alpha`` [rad] in [-pi, pi).
+
+    Examples
+    --------
+    >>> from firefleet.control.path_following import controller_inputs
+    >>> d_rp, x_err, y_err, alpha = controller_inputs([[0.0, 0.0, 0.0]], [[3.0, 4.0, 0.0]])[0]
+    >>> float(d_rp), float(x_err), float(y_err), round(float(alpha), 4)  # alpha = atan2(4, 3)
+    (5.0, 3.0, 4.0, 0.9273)
     """
     p = as_float_array(pose, "pose", (None, 3))
     d = as_float_array(desired, "desired", (p.shape[0], 3))
@@ -169,6 +183,17 @@ class PathFollowingController:
         ``omega`` [deg/s] (the deliverable's units, as a MATLAB user designs them).
     correction : SugenoSystem
         Input ``y_err`` [m], output ``lambda`` [deg].
+
+    Examples
+    --------
+    >>> from firefleet.control.path_following import PathFollowingController, controller_inputs
+    >>> controller = PathFollowingController.builtin()
+    >>> [variable.name for variable in controller.main.inputs]
+    ['D_rp', 'x_err', 'alpha']
+    >>> inputs = controller_inputs([[0.0, 0.0, 0.0]] * 3, [[1.0, 0.0, 0.0]] * 3)
+    >>> v, omega, lam = controller.command(inputs)
+    >>> v.shape, omega.shape, lam.shape
+    ((3,), (3,), (3,))
     """
 
     main: SugenoSystem

@@ -78,6 +78,15 @@ class PidParams:
         Back-calculation time constant T_t of the anti-windup [s], > 0.
     output_limit : float
         Output saturation |u| <= output_limit (the motor supply voltage) [V].
+
+    Examples
+    --------
+    >>> from firefleet.control.pid import PidParams
+    >>> p = PidParams()
+    >>> p.ki / p.kp
+    10.0
+    >>> len(p.gains)
+    7
     """
 
     kp: float = 2.5
@@ -126,6 +135,13 @@ class PidState:
         Filtered derivative term D [V].
     last_measurement : ndarray, shape S
         The previous measurement y [rad/s].
+
+    Examples
+    --------
+    >>> from firefleet.control.pid import pid_init
+    >>> s = pid_init([[1.0, 2.0]])
+    >>> s.integral.tolist(), s.last_measurement.tolist()
+    ([[0.0, 0.0]], [[1.0, 2.0]])
     """
 
     integral: FloatArray
@@ -134,7 +150,15 @@ class PidState:
 
 
 def pid_init(measurement: ArrayLike) -> PidState:
-    """Controller memory at rest, with ``measurement`` as the previous measurement."""
+    """Controller memory at rest, with ``measurement`` as the previous measurement.
+
+    Examples
+    --------
+    >>> from firefleet.control.pid import pid_init
+    >>> s = pid_init([0.0, 5.0])
+    >>> s.derivative.tolist(), s.last_measurement.tolist()
+    ([0.0, 0.0], [0.0, 5.0])
+    """
     y = np.array(measurement, dtype=np.float64)
     return PidState(integral=np.zeros_like(y), derivative=np.zeros_like(y), last_measurement=y)
 
@@ -165,6 +189,16 @@ def pid_step(
         The memory for the next period.
     output : ndarray, shape S
         Saturated output u_sat [V], to be held over the period.
+
+    Examples
+    --------
+    >>> from firefleet.control.pid import PidParams, pid_init, pid_step
+    >>> p = PidParams(kp=2.0, ki=10.0, kd=0.0, setpoint_weight=1.0)
+    >>> state, u = pid_step(pid_init([0.0]), [3.0], [0.0], p, 0.01)
+    >>> u.tolist(), state.integral.round(4).tolist()
+    ([6.0], [0.3])
+    >>> pid_step(pid_init([0.0]), [100.0], [0.0], p, 0.01)[1].tolist()
+    [12.0]
     """
     r = np.asarray(reference, dtype=np.float64)
     y = np.asarray(measurement, dtype=np.float64)
@@ -207,6 +241,14 @@ def pid_step_one(
     integral, derivative, output : float
         The new integral and filtered derivative [V] (the new last measurement is
         ``measurement``) and the saturated output u_sat [V].
+
+    Examples
+    --------
+    >>> from firefleet.control.pid import PidParams, pid_init, pid_step, pid_step_one
+    >>> p = PidParams()
+    >>> integral, derivative, u = pid_step_one(0.0, 0.0, 0.0, 10.0, 1.0, p.gains, 0.01)
+    >>> u == float(pid_step(pid_init(0.0), 10.0, 1.0, p, 0.01)[1])
+    True
     """
     kp, ki, kd, tf, b, tt, lim = gains
     d = (tf * derivative - kd * (measurement - last_measurement)) / (tf + dt_s)

@@ -39,6 +39,16 @@ def align_rigid_2d(source: ArrayLike, target: ArrayLike) -> tuple[FloatArray, Fl
     translation : ndarray, shape (2,)
         t, minimising ``sum |R source_i + t - target_i|^2`` (Umeyama 1991, eqs. 40-42,
         scale fixed at 1).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation.alignment import align_rigid_2d
+    >>> source = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 2.0]])
+    >>> target = source @ np.array([[0.0, -1.0], [1.0, 0.0]]).T + [3.0, 4.0]  # turned 90 deg
+    >>> rotation, translation = align_rigid_2d(source, target)
+    >>> (rotation.round(12) + 0.0).tolist(), translation.round(12).tolist()
+    ([[0.0, -1.0], [1.0, 0.0]], [3.0, 4.0])
     """
     src = as_float_array(source, "source", (None, 2))
     dst = as_float_array(target, "target", (src.shape[0], 2))
@@ -64,6 +74,16 @@ def absolute_trajectory_error(estimate: ArrayLike, reference: ArrayLike) -> floa
     -------
     float
         ``sqrt(mean |R e_i + t - r_i|^2)`` with R, t from :func:`align_rigid_2d`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation.alignment import absolute_trajectory_error
+    >>> reference = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
+    >>> absolute_trajectory_error(reference + [5.0, -1.0], reference)  # a shift costs nothing
+    0.0
+    >>> round(absolute_trajectory_error([[0.0, 0.1], [1.0, -0.1], [2.0, 0.1]], reference), 4)
+    0.0943
     """
     e = np.asarray(estimate, dtype=np.float64)
     r = np.asarray(reference, dtype=np.float64)

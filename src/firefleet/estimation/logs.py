@@ -106,6 +106,15 @@ class SlamLog:
     truth_pose : ndarray, shape (T, 3) or None
     truth_landmark_ids : ndarray of int64, shape (L,) or None
     truth_landmarks : ndarray, shape (L, 2) or None
+
+    Examples
+    --------
+    >>> from firefleet.estimation.logs import parse_log
+    >>> log = parse_log(["ODOMETRY 0 1 1 0 0 1e-4 0 0 1e-4 0 1e-6", "LANDMARK 1 7 3 4 0.01 0 0.01"])
+    >>> log.n_poses, log.n_observations, log.landmark_ids.tolist(), log.obs_z.round(4).tolist()
+    (2, 1, [7], [[5.0, 0.9273]])
+    >>> log.dead_reckoning().tolist()
+    [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
     """
 
     name: str
@@ -220,6 +229,17 @@ def read_log(path: str | Path) -> SlamLog:
     InputError
         If the file is missing, empty, or a line is malformed: the message starts with
         ``path:line:`` and says what is wrong.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from firefleet.estimation import read_log
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(folder.name) / "tiny.txt"
+    >>> _ = path.write_text("ODOMETRY 0 1 1 0 0 1e-4 0 0 1e-4 0 1e-6")
+    >>> read_log(path).odometry.tolist()
+    [[1.0, 0.0, 0.0]]
+    >>> folder.cleanup()
     """
     p = Path(path)
     return parse_log(_open_text(p).splitlines(), name=str(p))
@@ -382,6 +402,13 @@ def gtsam_text(log: SlamLog) -> str:
 
     Observations without a landmark id (``-1``) are left out. The odometry's full
     covariance is written as ``c11 c12 c13 c22 c23 c33`` (``NoiseFormatCOV``).
+
+    Examples
+    --------
+    >>> from firefleet.estimation.logs import gtsam_text, parse_log
+    >>> log = parse_log(["ODOMETRY 0 1 1 0 0 1e-4 0 0 1e-4 0 1e-6", "LANDMARK 1 7 3 4 0.01 0 0.01"])
+    >>> [line.split()[0] for line in gtsam_text(log).splitlines()]
+    ['ODOMETRY', 'BR']
     """
     return "\n".join(_chain_lines(log, firefleet=False)) + "\n"
 
@@ -392,6 +419,15 @@ def format_log(log: SlamLog) -> str:
     Numbers are written with 17 significant digits, so a round trip is exact.
     Observations become ``BR`` lines with diagonal noise (the off-diagonal term of a
     non-diagonal observation covariance is dropped).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation.logs import format_log, parse_log
+    >>> log = parse_log(["ODOMETRY 0 1 1 0 0 1e-4 0 0 1e-4 0 1e-6", "LANDMARK 1 7 3 4 0.01 0 0.01"])
+    >>> text = format_log(log)
+    >>> text.splitlines()[0], np.array_equal(parse_log(text.splitlines()).obs_z, log.obs_z)
+    ('FIREFLEET-SLAM-LOG 1', True)
     """
     g = _G
     lines = [

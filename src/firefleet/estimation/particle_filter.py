@@ -488,6 +488,12 @@ class MclParams:
         Needs ``bounds``.
     bounds : tuple of float or None
         x_min, x_max, y_min, y_max [m] of the map, for ``random_fraction``.
+
+    Examples
+    --------
+    >>> from firefleet.estimation import MclParams
+    >>> MclParams(random_fraction=0.05, bounds=(0.0, 10.0, 0.0, 5.0)).resample_threshold
+    0.5
     """
 
     resample_threshold: float = 0.5
@@ -576,6 +582,16 @@ def run_mcl(
     Returns
     -------
     MclResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation import run_mcl
+    >>> obs = dict(obs_step=[1], obs_landmark=[0], obs_z=[[1.0, 0.0]], obs_cov=[np.eye(2) * 0.01])
+    >>> rng, odo_cov, p = np.random.default_rng(0), np.eye(3)[None] * 1e-4, np.zeros((200, 3))
+    >>> r = run_mcl([[1.0, 0, 0]], odo_cov, **obs, landmark_map={0: (2, 0)}, particles=p, rng=rng)
+    >>> (np.round(r.mean[-1], 1) + 0.0).tolist()  # 1 m driven, the landmark 1 m ahead at (2, 0)
+    [1.0, 0.0, 0.0]
     """
     prm = params or MclParams()
     odo = as_float_array(odometry, "odometry", (None, 3))

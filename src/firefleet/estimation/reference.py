@@ -50,6 +50,21 @@ def gtsam_optimum(log: SlamLog, path: str | Path) -> tuple[NDArray[np.float64], 
     ------
     InputError
         If GTSAM is not installed.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from firefleet.estimation.logs import gtsam_text, parse_log
+    >>> from firefleet.estimation.reference import gtsam_optimum
+    >>> odometry = "ODOMETRY {} {} 1 0 0 1e-4 0 0 1e-4 0 1e-6"
+    >>> log = parse_log([odometry.format(0, 1), odometry.format(1, 2)])
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(folder.name) / "chain.txt"
+    >>> _ = path.write_text(gtsam_text(log))
+    >>> positions, error = gtsam_optimum(log, path)  # odometry only: the chain itself
+    >>> (positions.round(6) + 0.0).tolist(), round(error, 6)
+    ([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]], 0.0)
+    >>> folder.cleanup()
     """
     try:
         import gtsam

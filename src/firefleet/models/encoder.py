@@ -36,6 +36,13 @@ class EncoderParams:
     window_steps : int
         Number of control periods the count difference is taken over (>= 1); the
         default 2 gives a 0.15 rad/s quantum at 10 ms.
+
+    Examples
+    --------
+    >>> from firefleet.models import EncoderParams
+    >>> p = EncoderParams(counts_per_rev=2048, window_steps=2)
+    >>> round(p.resolution_rad_s(0.01), 4)
+    0.1534
     """
 
     counts_per_rev: int = 2048
@@ -84,6 +91,13 @@ class EncoderState:
     history : ndarray, shape (window_steps + 1, *S)
         The counts (or, for an ideal sensor, angles) of the last window_steps + 1
         samples, oldest first.
+
+    Examples
+    --------
+    >>> from firefleet.models import EncoderParams, encoder_init
+    >>> state = encoder_init([[0.0, 0.0]], EncoderParams(window_steps=2))
+    >>> state.angle_rad.shape, state.history.shape
+    ((1, 2), (3, 1, 2))
     """
 
     angle_rad: FloatArray
@@ -100,6 +114,14 @@ def encoder_init(angle_rad: ArrayLike, params: EncoderParams) -> EncoderState:
     """Encoder state for shafts at rest at ``angle_rad`` [rad] (any shape).
 
     A random ``angle_rad`` within one count models the unknown phase of the code wheel.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.models import EncoderParams, encoder_init
+    >>> state = encoder_init(np.pi, EncoderParams(counts_per_rev=2048, window_steps=1))
+    >>> state.history.tolist()
+    [1024.0, 1024.0]
     """
     a = np.array(angle_rad, dtype=np.float64)
     first = _read(a, params)
@@ -128,6 +150,16 @@ def encoder_step(
         The new count (the angle itself for an ideal sensor).
     speed_rad_s : ndarray, shape S
         Measured speed: count difference over the window, in rad/s.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.models import EncoderParams, encoder_init, encoder_step
+    >>> p = EncoderParams(counts_per_rev=2048, window_steps=1)
+    >>> state = encoder_init(0.0, p)
+    >>> state, counts, speed = encoder_step(state, 10.0 * 0.01, p, 0.01)
+    >>> float(counts), round(float(speed), 4), round(2 * np.pi * 32 / 2048 / 0.01, 4)
+    (32.0, 9.8175, 9.8175)
     """
     angle = state.angle_rad + np.asarray(dphi_rad, dtype=np.float64)
     counts = _read(angle, params)

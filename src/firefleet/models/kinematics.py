@@ -44,6 +44,13 @@ class RobotGeometry:
         Wheel radius r [m].
     axle_length_m : float
         Distance between the wheels L [m].
+
+    Examples
+    --------
+    >>> from firefleet.models import RobotGeometry
+    >>> g = RobotGeometry(wheel_radius_m=0.05, axle_length_m=0.3)
+    >>> g.wheel_radius_m, g.axle_length_m
+    (0.05, 0.3)
     """
 
     wheel_radius_m: float = 0.045
@@ -54,7 +61,15 @@ class RobotGeometry:
 
 
 def wrap_angle(angle_rad: ArrayLike) -> FloatArray:
-    """Wrap angles to [-pi, pi) [rad]."""
+    """Wrap angles to [-pi, pi) [rad].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.models import wrap_angle
+    >>> np.round(wrap_angle([0.0, 3 * np.pi / 2, np.pi, -np.pi]), 4).tolist()
+    [0.0, -1.5708, -3.1416, -3.1416]
+    """
     a = np.asarray(angle_rad, dtype=np.float64)
     w = (a + np.pi) % (2.0 * np.pi) - np.pi
     # a hair below an odd multiple of -pi, the modulo rounds up to 2 pi: give -pi, not +pi
@@ -92,6 +107,13 @@ def body_to_wheels(v_m_s: ArrayLike, omega_rad_s: ArrayLike, geometry: RobotGeom
     ndarray, shape (N, 2)
         Right, left wheel angular speeds [rad/s]:
         ``(2 v +- omega L) / (2 r)``.
+
+    Examples
+    --------
+    >>> from firefleet.models import RobotGeometry, body_to_wheels
+    >>> g = RobotGeometry(wheel_radius_m=0.05, axle_length_m=0.2)
+    >>> body_to_wheels([1.0, 0.0], [0.0, 1.0], g).tolist()
+    [[20.0, 20.0], [2.0, -2.0]]
     """
     v = np.asarray(v_m_s, dtype=np.float64)
     w = np.asarray(omega_rad_s, dtype=np.float64)
@@ -114,6 +136,14 @@ def wheels_to_body(
     -------
     v_m_s, omega_rad_s : ndarray, shape (N,)
         ``v = r (w_R + w_L) / 2`` and ``omega = r (w_R - w_L) / L``.
+
+    Examples
+    --------
+    >>> from firefleet.models import RobotGeometry, wheels_to_body
+    >>> g = RobotGeometry(wheel_radius_m=0.05, axle_length_m=0.2)
+    >>> v, omega = wheels_to_body([[22.0, 18.0]], g)
+    >>> round(float(v[0]), 4), round(float(omega[0]), 4)
+    (1.0, 1.0)
     """
     w = as_float_array(wheel_rad_s, "wheel_rad_s", (None, 2))
     r, L = geometry.wheel_radius_m, geometry.axle_length_m
@@ -212,6 +242,14 @@ def unicycle_step(
     -------
     ndarray, shape (N, 3)
         The poses after the step, theta wrapped to [-pi, pi).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.models import unicycle_step
+    >>> pose = unicycle_step([[0.0, 0.0, 0.0]], 1.0, np.pi / 2, 1.0)
+    >>> np.round(pose, 4).tolist()
+    [[0.6366, 0.6366, 1.5708]]
     """
     p = as_float_array(pose, "pose", (None, 3))
     n = p.shape[0]
@@ -237,6 +275,16 @@ def diff_drive_step(pose: ArrayLike, dphi_rad: ArrayLike, geometry: RobotGeometr
     ndarray, shape (N, 3)
         The poses after the step: exact when the two wheel speeds keep their ratio over
         the step (an arc), the usual odometry update otherwise.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.models import RobotGeometry, diff_drive_step
+    >>> g = RobotGeometry(wheel_radius_m=0.05, axle_length_m=0.2)
+    >>> np.round(diff_drive_step([[0.0, 0.0, 0.0]], [[10.0, 10.0]], g), 4).tolist()
+    [[0.5, 0.0, 0.0]]
+    >>> np.round(diff_drive_step([[0.0, 0.0, 0.0]], [[1.0, -1.0]], g), 4).tolist()
+    [[0.0, 0.0, 0.5]]
     """
     p = as_float_array(pose, "pose", (None, 3))
     d = as_float_array(dphi_rad, "dphi_rad", (p.shape[0], 2))

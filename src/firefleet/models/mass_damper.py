@@ -36,6 +36,12 @@ class MassDamperParams:
         B [N s/m].
     kd_n_s_m : float
         k_d [N s/m], the extra damping that shapes the transient response.
+
+    Examples
+    --------
+    >>> from firefleet.models import MassDamperParams
+    >>> MassDamperParams(mass_kg=2.0, damping_n_s_m=1.0, kd_n_s_m=3.0).time_constant_s
+    0.5
     """
 
     mass_kg: float = 1.0
@@ -72,6 +78,15 @@ def mass_damper_step(
     -------
     ndarray, shape (N, 4)
         State after the step.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.models import MassDamperParams, mass_damper_step
+    >>> p = MassDamperParams(mass_kg=1.0, damping_n_s_m=1.0, kd_n_s_m=1.0)
+    >>> s = mass_damper_step([[0.0, 0.0, 0.0, 0.0]], [[2.0, 0.0]], 100.0, p)
+    >>> np.round(s[0, 2:], 4).tolist()
+    [1.0, 0.0]
     """
     s = as_float_array(state, "state", (None, 4))
     f = as_float_array(force_n, "force_n", (s.shape[0], 2))

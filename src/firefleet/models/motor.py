@@ -59,6 +59,16 @@ class MotorParams:
         Torque constant Kt [N m/A].
     supply_v : float
         Supply voltage [V]: the limit of the speed controller's output.
+
+    Examples
+    --------
+    >>> from firefleet.models import MotorParams
+    >>> p = MotorParams()
+    >>> round(p.speed_gain_rad_s_per_v, 4)
+    1.3955
+    >>> current_a, speed_rad_s = p.steady_state(12.0)
+    >>> round(speed_rad_s, 4), round(12.0 * p.speed_gain_rad_s_per_v, 4)
+    (16.7459, 16.7459)
     """
 
     resistance_ohm: float = 3.07
@@ -125,6 +135,13 @@ class DiscreteMotor:
 
     ``x[k+1] = ad @ x[k] + bd @ u[k]`` and the angle turned during the step
     ``dphi = c_ad @ x[k] + c_bd @ u[k]``.
+
+    Examples
+    --------
+    >>> from firefleet.models import MotorParams, discretise_motor
+    >>> m = discretise_motor(MotorParams(), 0.01)
+    >>> m.ad.shape, m.bd.shape, m.c_ad.shape, m.c_bd.shape
+    ((2, 2), (2, 2), (2,), (2,))
     """
 
     params: MotorParams
@@ -179,6 +196,16 @@ def discretise_motor(params: MotorParams, dt_s: float) -> DiscreteMotor:
     Cached per (params, dt_s): the result is immutable, and ``expm`` is the costliest
     part of a short run. Van Loan's method: with the shaft angle appended to the state
     (``dphi/dt = w``), ``expm([[A3, B3], [0, 0]] dt) = [[Ad3, Bd3], [0, I]]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.models import MotorParams, discretise_motor
+    >>> p = MotorParams()
+    >>> m = discretise_motor(p, 10.0)
+    >>> x_inf = np.linalg.solve(np.eye(2) - m.ad, m.bd @ [12.0, 0.0])
+    >>> np.allclose(x_inf, p.steady_state(12.0))
+    True
     """
     if not (np.isfinite(dt_s) and dt_s > 0):
         raise InputError(f"dt_s must be > 0, got {dt_s}")
@@ -220,6 +247,16 @@ def motor_step(
         State after the step.
     dphi_rad : ndarray
         Angle turned during the step [rad], exact.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.models import MotorParams, discretise_motor, motor_step
+    >>> p = MotorParams()
+    >>> m = discretise_motor(p, 5.0)
+    >>> i, w, dphi = motor_step(np.zeros(2), np.zeros(2), 12.0, 0.0, m)
+    >>> np.round(w, 3).tolist(), round(p.steady_state(12.0)[1], 3)
+    ([16.746, 16.746], 16.746)
     """
     i = np.asarray(current_a, dtype=np.float64)
     w = np.asarray(speed_rad_s, dtype=np.float64)

@@ -62,6 +62,14 @@ class StereoFrame:
         grab for cameras.
     left, right : ndarray of uint8, shape (H, W, 3)
         BGR frames.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.capture import StereoFrame
+    >>> image = np.zeros((4, 6, 3), np.uint8)
+    >>> StereoFrame(index=0, t_left_s=1.0, t_right_s=1.25, left=image, right=image).skew_s
+    0.25
     """
 
     index: int
@@ -98,6 +106,16 @@ def open_source(
     InputError
         Naming ``spec`` if it cannot be opened (no such device or file, busy device,
         undecodable file).
+
+    Examples
+    --------
+    >>> from firefleet.errors import InputError
+    >>> from firefleet.perception.capture import open_source
+    >>> try:
+    ...     open_source("no-such-video.avi")
+    ... except InputError as error:
+    ...     print(error)
+    video no-such-video.avi: no such file
     """
     m = _DEVICE.match(spec)
     if m is not None:
@@ -153,6 +171,23 @@ def read_pairs(
     InputError
         If a frame cannot be decoded, or the two sources give frames of different
         sizes.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import cv2
+    >>> import numpy as np
+    >>> from firefleet.perception.capture import open_source, read_pairs
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> video = str(pathlib.Path(folder.name) / "clip.avi")
+    >>> writer = cv2.VideoWriter(video, cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (32, 24))
+    >>> for k in range(5):
+    ...     writer.write(np.full((24, 32, 3), 40 * k, np.uint8))
+    >>> writer.release()
+    >>> pairs = list(read_pairs(open_source(video), open_source(video), n_frames=2, every=2))
+    >>> [pair.index for pair in pairs], pairs[0].left.shape, [round(p.t_left_s, 3) for p in pairs]
+    ([0, 1], (24, 32, 3), [0.0, 0.2])
+    >>> folder.cleanup()
     """
     if n_frames < 1 or offset_frames < 0 or every < 1:
         raise InputError(
@@ -211,6 +246,15 @@ def pair_files(frame: StereoFrame) -> dict[str, bytes]:
     ------
     InputError
         If a frame cannot be encoded.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.capture import StereoFrame, pair_files
+    >>> image = np.zeros((4, 6, 3), np.uint8)
+    >>> files = pair_files(StereoFrame(7, t_left_s=0.0, t_right_s=0.0, left=image, right=image))
+    >>> sorted(files), files["left_000007.png"][:4]
+    (['left_000007.png', 'right_000007.png'], b'\x89PNG')
     """
     files: dict[str, bytes] = {}
     for side, img in (("left", frame.left), ("right", frame.right)):
@@ -223,7 +267,17 @@ def pair_files(frame: StereoFrame) -> dict[str, bytes]:
 
 
 def timestamp_row(frame: StereoFrame) -> dict[str, Any]:
-    """The ``timestamps.csv`` row of a pair: file names, timestamps and skew [s]."""
+    """The ``timestamps.csv`` row of a pair: file names, timestamps and skew [s].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.capture import StereoFrame, timestamp_row
+    >>> image = np.zeros((4, 6, 3), np.uint8)
+    >>> row = timestamp_row(StereoFrame(3, t_left_s=0.5, t_right_s=0.75, left=image, right=image))
+    >>> row["left"], row["right"], row["skew_s"]
+    ('left_000003.png', 'right_000003.png', 0.25)
+    """
     return {
         "index": frame.index,
         "left": f"left_{frame.index:06d}.png",
@@ -236,7 +290,18 @@ def timestamp_row(frame: StereoFrame) -> dict[str, Any]:
 
 def timestamps_csv(rows: list[dict[str, Any]]) -> str:
     """``timestamps.csv`` text of :func:`timestamp_row` rows (columns
-    :data:`TIMESTAMP_COLUMNS`)."""
+    :data:`TIMESTAMP_COLUMNS`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.capture import StereoFrame, timestamp_row, timestamps_csv
+    >>> image = np.zeros((4, 6, 3), np.uint8)
+    >>> row = timestamp_row(StereoFrame(0, t_left_s=0.0, t_right_s=0.5, left=image, right=image))
+    >>> print(timestamps_csv([row]), end="")
+    index,left,right,t_left_s,t_right_s,skew_s
+    0,left_000000.png,right_000000.png,0.0,0.5,0.5
+    """
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=list(TIMESTAMP_COLUMNS), lineterminator="\n")
     writer.writeheader()
@@ -264,6 +329,22 @@ def stereo_capture(
     ------
     InputError
         If a source cannot be opened (named), or yields no frame at all.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import cv2
+    >>> import numpy as np
+    >>> from firefleet.perception.capture import stereo_capture
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> video = str(pathlib.Path(folder.name) / "clip.avi")
+    >>> writer = cv2.VideoWriter(video, cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (32, 24))
+    >>> for k in range(3):
+    ...     writer.write(np.full((24, 32, 3), 40 * k, np.uint8))
+    >>> writer.release()
+    >>> [pair.skew_s for pair in stereo_capture(video, video, n_frames=3)]
+    [0.0, 0.0, 0.0]
+    >>> folder.cleanup()
     """
     devices = (_is_device(left), _is_device(right))
     produced = 0

@@ -104,6 +104,16 @@ def crc16_ccitt(data: ArrayLike) -> NDArray[np.uint16]:
     -------
     ndarray of uint16, shape (P,)
         The CRC of each row (the "XMODEM" variant; equals ``binascii.crc_hqx(row, 0)``).
+
+    Examples
+    --------
+    >>> import binascii
+    >>> import numpy as np
+    >>> from firefleet.perception.vospi import crc16_ccitt
+    >>> hex(int(crc16_ccitt(np.frombuffer(b"123456789", np.uint8)[None])[0]))  # XMODEM check
+    '0x31c3'
+    >>> int(crc16_ccitt([list(b"lepton")])[0]) == binascii.crc_hqx(b"lepton", 0)
+    True
     """
     rows = np.asarray(data, dtype=np.uint8)
     if rows.ndim != 2:
@@ -126,6 +136,16 @@ def packet_crc(packets: ArrayLike) -> NDArray[np.uint16]:
     -------
     ndarray of uint16, shape (P,)
         CRC-16-CCITT of each packet with the ID's top four bits and the CRC field zeroed.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.vospi import PACKET_BYTES, encode_vospi, packet_crc
+    >>> packets = np.frombuffer(encode_vospi(np.zeros((1, 60, 80), np.uint16), lepton=2), np.uint8)
+    >>> packets = packets.reshape(-1, PACKET_BYTES)
+    >>> carried = packets[:, 2].astype(np.uint16) << 8 | packets[:, 3]
+    >>> packets.shape, bool(np.all(packet_crc(packets) == carried))
+    ((60, 164), True)
     """
     pk = np.array(packets, dtype=np.uint8, copy=True)
     if pk.ndim != 2 or pk.shape[1] != PACKET_BYTES:
@@ -181,6 +201,15 @@ class VospiStats:
         Partial frames abandoned because of damage or a segment out of order.
     trailing_bytes : int
         Bytes at the end, too few for a packet (a truncated stream).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.vospi import encode_vospi, parse_vospi
+    >>> stream = encode_vospi(np.ones((2, 60, 80), np.uint16), lepton=2)
+    >>> stats = parse_vospi(stream[:-10], lepton=2).stats  # the last packet cut short
+    >>> stats.frames, stats.frames_dropped, stats.trailing_bytes
+    (1, 1, 154)
     """
 
     packets: int = 0
@@ -207,6 +236,14 @@ class VospiFrames:
         a Lepton 2, ``(F, 120, 160)`` for a Lepton 3, in stream order.
     stats : VospiStats
         Counts of everything read and dropped.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.vospi import encode_vospi, parse_vospi
+    >>> result = parse_vospi(encode_vospi(np.ones((3, 120, 160), np.uint16), lepton=3))
+    >>> result.frames.shape, result.frames.dtype, result.stats.segments
+    ((3, 120, 160), dtype('uint16'), 12)
     """
 
     frames: NDArray[np.uint16] = field(repr=False)
@@ -249,6 +286,15 @@ def encode_vospi(
     -------
     bytes
         The stream, ``164 * packets`` bytes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.vospi import PACKET_BYTES, encode_vospi
+    >>> len(encode_vospi(np.zeros((1, 60, 80), np.uint16), lepton=2)) == 60 * PACKET_BYTES
+    True
+    >>> len(encode_vospi(np.zeros((1, 120, 160), np.uint16), lepton=3)) == 4 * 60 * PACKET_BYTES
+    True
     """
     lep = _check_lepton(lepton)
     rows, cols = _frame_shape(lep)
@@ -393,6 +439,15 @@ def parse_vospi(data: bytes | bytearray | memoryview, *, lepton: Lepton = 3) -> 
     -----
     Datasheet 500-0659-00-09 sections 4.2.2-4.2.3. Packets are checked in vectorised
     batches; the state machine then walks the good packets in order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.vospi import encode_vospi, parse_vospi
+    >>> frames = np.random.default_rng(0).integers(0, 16384, (2, 60, 80))
+    >>> result = parse_vospi(encode_vospi(frames, lepton=2), lepton=2)
+    >>> bool(np.array_equal(result.frames, frames)), result.stats.frames, result.stats.bad_packets
+    (True, 2, 0)
     """
     lep = _check_lepton(lepton)
     if not isinstance(data, bytes | bytearray | memoryview):

@@ -43,6 +43,15 @@ class PolynomialPath:
         ``c0 .. c5`` (at most six; fewer for lower orders) [m^(1-k)].
     x_start_m, x_end_m : float
         Where the path starts and ends [m]; ``x_end_m < x_start_m`` travels towards -x.
+
+    Examples
+    --------
+    >>> from firefleet.planning import PolynomialPath
+    >>> parabola = PolynomialPath((0.0, 0.0, 1.0), x_start_m=0.0, x_end_m=2.0)
+    >>> float(parabola.y(2.0)), float(parabola.slope(2.0)), float(parabola.curvature(0.0))
+    (4.0, 4.0, 2.0)
+    >>> round(parabola.length_m, 4)  # sqrt(17) + asinh(4) / 4
+    4.6468
     """
 
     coefficients: tuple[float, ...]
@@ -212,6 +221,15 @@ def straight_line(start: tuple[float, float], end: tuple[float, float]) -> Polyn
     ------
     InputError
         If the two points have the same x (a vertical line is not a graph y(x)).
+
+    Examples
+    --------
+    >>> from firefleet.planning import straight_line
+    >>> line = straight_line((0.0, 0.0), (3.0, 4.0))
+    >>> line.coefficients, round(line.length_m, 12)
+    ((0.0, 1.3333333333333333), 5.0)
+    >>> line.sample(2)[:, :2].round(12).tolist()
+    [[0.0, 0.0], [1.5, 2.0], [3.0, 4.0]]
     """
     (x0, y0), (x1, y1) = start, end
     if x0 == x1:

@@ -52,6 +52,16 @@ class Trajectory:
         Each robot's distance between two points along its path [m] (its path's arc
         length / n): the pace of the extension past the end. None: the length of the
         last piece's chord.
+
+    Examples
+    --------
+    >>> from firefleet.planning import Trajectory, straight_line
+    >>> line = straight_line((0.0, 0.0), (4.0, 0.0))
+    >>> traj = Trajectory.from_paths([line], pieces=4, duration_s=8.0)
+    >>> traj.points.shape, traj.period_s, traj.duration_s
+    ((1, 5, 3), 2.0, 8.0)
+    >>> traj.index(3.0), traj.desired(3.0).round(12).tolist()
+    (2, [[2.0, 0.0, 0.0]])
     """
 
     points: FloatArray

@@ -15,7 +15,15 @@ _BUILTIN = resources.files("firefleet.scenarios") / "builtin"
 
 
 def builtin_names() -> list[str]:
-    """Names of the built-in scenarios, sorted."""
+    """Names of the built-in scenarios, sorted.
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import builtin_names
+    >>> names = builtin_names()
+    >>> "motor-pid" in names, names == sorted(names)
+    (True, True)
+    """
     return sorted(
         p.name.removesuffix(".yaml") for p in _BUILTIN.iterdir() if p.name.endswith(".yaml")
     )
@@ -30,6 +38,17 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     ------
     InputError
         For an unknown name (with the closest built-in names) or a bad file.
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import load_scenario
+    >>> load_scenario("motor-pid").command.kind
+    'wheel-speed-step'
+    >>> try:
+    ...     load_scenario("motor-pdi")
+    ... except ValueError as error:
+    ...     print(str(error).split(";")[0], "motor-pid" in str(error))
+    unknown scenario 'motor-pdi' True
     """
     text = str(name_or_path)
     if isinstance(name_or_path, Path) or text.endswith((".yaml", ".yml")) or "/" in text:

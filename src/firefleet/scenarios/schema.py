@@ -73,6 +73,16 @@ class Claim:
         For a per-robot metric (a list in ``metrics.json``): the robot it is about,
         numbered from 1 as the deliverable numbers them. Without it, a claim on a
         per-robot metric must hold for every robot.
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import Claim
+    >>> claim = Claim(metric="steady_speed_rad_s", op="~", value=1.3955, rel_tol=0.005)
+    >>> claim.expected, claim.holds(1.40), claim.holds(1.45)
+    ('1.3955 ± 0.00698', True, False)
+    >>> per_robot = Claim(metric="wait_time_s", op="<", value=1.0, robot=2)
+    >>> per_robot.label, per_robot.holds([5.0, 0.5])
+    ('wait_time_s[robot 2]', True)
     """
 
     metric: str
@@ -143,7 +153,14 @@ def _plain(value: float | Sequence[float]) -> float | list[float]:
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class VoltageStep:
-    """Open loop: every motor gets ``voltage_v`` from ``start_s`` on (0 V before)."""
+    """Open loop: every motor gets ``voltage_v`` from ``start_s`` on (0 V before).
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import VoltageStep
+    >>> VoltageStep(kind="voltage-step", voltage_v=1.0).start_s
+    0.0
+    """
 
     kind: Literal["voltage-step"]
     voltage_v: float
@@ -155,7 +172,14 @@ class VoltageStep:
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class WheelSpeedStep:
-    """Closed loop: every wheel's speed reference steps to ``speed_rad_s`` at ``start_s``."""
+    """Closed loop: every wheel's speed reference steps to ``speed_rad_s`` at ``start_s``.
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import WheelSpeedStep
+    >>> WheelSpeedStep(kind="wheel-speed-step", speed_rad_s=10.0, start_s=0.5).speed_rad_s
+    10.0
+    """
 
     kind: Literal["wheel-speed-step"]
     speed_rad_s: float
@@ -391,7 +415,14 @@ Command = Annotated[
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class LoadStep:
-    """Load torque on every wheel motor, stepping from 0 to ``torque_n_m`` at ``start_s``."""
+    """Load torque on every wheel motor, stepping from 0 to ``torque_n_m`` at ``start_s``.
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import LoadStep
+    >>> LoadStep(torque_n_m=0.5, start_s=5.0).torque_n_m
+    0.5
+    """
 
     torque_n_m: float = 0.0
     start_s: float = 0.0
@@ -434,6 +465,13 @@ class Scenario:
         What the deliverable reports for it, quoted or summarised.
     claims : tuple of Claim
         Checked against the metrics after the run.
+
+    Examples
+    --------
+    >>> from firefleet import load_scenario
+    >>> scenario = load_scenario("motor-open-loop")
+    >>> scenario.n_steps, scenario.command.kind, len(scenario.poses)
+    (1000, 'voltage-step', 1)
     """
 
     name: str
@@ -604,6 +642,20 @@ def parse_scenario(data: Any, *, origin: str = "scenario") -> Scenario:
     ------
     InputError
         Naming every problem found, one per line.
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import parse_scenario
+    >>> data = {"name": "one-volt", "title": "1 V step", "duration_s": 1.0,
+    ...         "command": {"kind": "voltage-step", "voltage_v": 1.0}}
+    >>> scenario = parse_scenario(data)
+    >>> scenario.name, scenario.dt_s, scenario.n_steps
+    ('one-volt', 0.01, 100)
+    >>> try:
+    ...     parse_scenario({**data, "duration_s": "long"}, origin="demo.yaml")
+    ... except ValueError as error:
+    ...     print(str(error).splitlines()[0])
+    demo.yaml: duration_s: Input should be a valid number, got "long"
     """
     if not isinstance(data, dict):
         raise InputError(f"{origin}: a scenario must be a mapping, got {type(data).__name__}")
@@ -678,6 +730,16 @@ def read_scenario_file(path: str | Path) -> Scenario:
     ------
     InputError
         If the file is missing or unreadable, is not YAML, or is not a valid scenario.
+
+    Examples
+    --------
+    >>> from firefleet.errors import InputError
+    >>> from firefleet.scenarios import read_scenario_file
+    >>> try:
+    ...     read_scenario_file("no-such-scenario.yaml")
+    ... except InputError as error:
+    ...     print(error)
+    no-such-scenario.yaml: no such file
     """
     p = Path(path)
     try:

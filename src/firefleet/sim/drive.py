@@ -77,6 +77,16 @@ class DriveStack:
     slip_variance_m : float
         k^2 of each wheel's random travel error, variance per metre travelled [m]; the
         slip is drawn only when :func:`drive_step` is given a generator.
+
+    Examples
+    --------
+    >>> import math
+    >>> from firefleet.control.pid import PidParams
+    >>> from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+    >>> from firefleet.sim.drive import discretise_drive
+    >>> stack = discretise_drive(RobotGeometry(), MotorParams(), PidParams(), EncoderParams(), 0.01)
+    >>> stack.dt_s, stack.count_angle_rad == 2 * math.pi / 2048
+    (0.01, True)
     """
 
     geometry: RobotGeometry
@@ -142,6 +152,16 @@ def discretise_drive(
     Returns
     -------
     DriveStack
+
+    Examples
+    --------
+    >>> from firefleet.control.pid import PidParams
+    >>> from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+    >>> from firefleet.sim.drive import discretise_drive
+    >>> hardware = (RobotGeometry(axle_length_m=0.2), MotorParams(), PidParams(), EncoderParams())
+    >>> stack = discretise_drive(*hardware, 0.01, axle_scale=1.1)
+    >>> stack.geometry.axle_length_m, round(stack.true_geometry.axle_length_m, 12)
+    (0.2, 0.22)
     """
     if not (math.isfinite(axle_scale) and axle_scale > 0.0):
         raise InputError(f"drive.axle_scale must be > 0, got {axle_scale}")
@@ -183,6 +203,17 @@ class DriveState:
     odometry : ndarray, shape (N, 3), or None
         Dead-reckoned poses from the encoder counts and the nominal geometry, or None
         when not integrated (see :func:`drive_init`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.pid import PidParams
+    >>> from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+    >>> from firefleet.sim.drive import discretise_drive, drive_init
+    >>> stack = discretise_drive(RobotGeometry(), MotorParams(), PidParams(), EncoderParams(), 0.01)
+    >>> state = drive_init(np.zeros((3, 3)), np.zeros((3, 2)), stack, odometry=True)
+    >>> state.pose.shape, state.speed_rad_s.shape, state.odometry.shape
+    ((3, 3), (3, 2), (3, 3))
     """
 
     pose: FloatArray
@@ -209,6 +240,18 @@ def encoder_phase(encoder: EncoderParams, n_robots: int, rng: np.random.Generato
     -------
     ndarray, shape (n_robots, 2)
         Phases [rad] in [0, 2 pi / counts_per_rev).
+
+    Examples
+    --------
+    >>> import math
+    >>> import numpy as np
+    >>> from firefleet.models import EncoderParams
+    >>> from firefleet.sim.drive import encoder_phase
+    >>> phase = encoder_phase(EncoderParams(counts_per_rev=2048), 4, np.random.default_rng(0))
+    >>> phase.shape, bool(np.all((0 <= phase) & (phase < 2 * math.pi / 2048)))
+    ((4, 2), True)
+    >>> encoder_phase(EncoderParams(counts_per_rev=0), 2, np.random.default_rng(0)).tolist()
+    [[0.0, 0.0], [0.0, 0.0]]
     """
     cpr = encoder.counts_per_rev
     return rng.uniform(0.0, 2.0 * math.pi / cpr if cpr else 0.0, size=(n_robots, 2))
@@ -233,6 +276,17 @@ def drive_init(
     Returns
     -------
     DriveState
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.pid import PidParams
+    >>> from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+    >>> from firefleet.sim.drive import discretise_drive, drive_init
+    >>> stack = discretise_drive(RobotGeometry(), MotorParams(), PidParams(), EncoderParams(), 0.01)
+    >>> state = drive_init([[1.0, 2.0, 0.5]], np.zeros((1, 2)), stack)
+    >>> state.pose.tolist(), state.current_a.tolist(), state.odometry is None
+    ([[1.0, 2.0, 0.5]], [[0.0, 0.0]], True)
     """
     p = np.array(pose, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3:
@@ -271,6 +325,18 @@ def speed_control(
         With the PIDs' memory for the next period (nothing else changes).
     voltage_v : ndarray, shape (N, 2)
         Saturated motor voltages [V], to be held over the period (:func:`drive_step`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.pid import PidParams
+    >>> from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+    >>> from firefleet.sim.drive import discretise_drive, drive_init, speed_control
+    >>> stack = discretise_drive(RobotGeometry(), MotorParams(), PidParams(), EncoderParams(), 0.01)
+    >>> state = drive_init(np.zeros((1, 3)), np.zeros((1, 2)), stack)
+    >>> state, voltage = speed_control(state, [[4.0, 4.0]], stack)
+    >>> voltage.tolist()  # at rest: kp * b * r = 2.5 * 0.5 * 4 V
+    [[5.0, 5.0]]
     """
     pid, voltage = pid_step(state.pid, reference_rad_s, state.measured_rad_s, stack.pid, stack.dt_s)
     return (
@@ -304,6 +370,18 @@ def dead_reckoning(
     -------
     ndarray, shape (N, 3)
         The poses after: an arc per period (:func:`firefleet.models.kinematics.diff_drive_step`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.pid import PidParams
+    >>> from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+    >>> from firefleet.sim.drive import dead_reckoning, discretise_drive
+    >>> ideal = EncoderParams(counts_per_rev=0)  # counts are angles [rad]
+    >>> stack = discretise_drive(RobotGeometry(), MotorParams(), PidParams(), ideal, 0.01)
+    >>> pose = dead_reckoning(np.zeros((1, 3)), np.zeros((1, 2)), np.full((1, 2), 10.0), stack)
+    >>> pose.round(12).tolist()  # 10 rad of a 0.045 m wheel: 0.45 m straight ahead
+    [[0.45, 0.0, 0.0]]
     """
     counted = (counts_after - counts_before) * stack.count_angle_rad
     return diff_drive_step(pose, counted, stack.geometry)
@@ -338,6 +416,20 @@ def drive_step(
         The motors (exact zero-order hold), the true poses (an arc per period, with the
         true wheel radii, the true axle and the slip), the encoders (counts and measured
         speeds), and the odometry (the count differences with the nominal geometry).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.pid import PidParams
+    >>> from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+    >>> from firefleet.sim.drive import discretise_drive, drive_init, drive_step
+    >>> motor = MotorParams()
+    >>> stack = discretise_drive(RobotGeometry(), motor, PidParams(), EncoderParams(), 0.01)
+    >>> state = drive_init(np.zeros((1, 3)), np.zeros((1, 2)), stack)
+    >>> for _ in range(300):  # 3 s at 12 V: the open-loop steady speed
+    ...     state = drive_step(state, 12.0, stack)
+    >>> state.speed_rad_s.round(3).tolist(), round(motor.steady_state(12.0)[1], 3)
+    ([[16.746, 16.746]], 16.746)
     """
     current, speed, dphi = motor_step(
         state.current_a, state.speed_rad_s, voltage_v, load_torque_n_m, stack.motor

@@ -318,7 +318,18 @@ ticks to record, and a progress callback to call between its chunks of ticks."""
 
 def default_stages(scenario: Scenario, decider: Decider) -> Stages:
     """The stages a scenario runs with: static world with its load step, no sensors, an
-    ideal link, and odometry if the kind uses a pose estimate."""
+    ideal link, and odometry if the kind uses a pose estimate.
+
+    Examples
+    --------
+    >>> from firefleet import load_scenario
+    >>> from firefleet.sim.loop import default_stages
+    >>> from firefleet.sim.registry import task_kind
+    >>> scenario = load_scenario("path-straight")
+    >>> decider = task_kind(scenario.command.kind).decider
+    >>> default_stages(scenario, decider).names()
+    {'world': 'StaticWorld', 'sensors': 'NoSensors', 'link': 'IdealLink', 'estimation': 'Odometry'}
+    """
     return Stages(
         world=StaticWorld(torque_n_m=scenario.load.torque_n_m, start_s=scenario.load.start_s),
         estimation=Odometry() if decider.uses_estimate else NoEstimation(),
@@ -326,7 +337,16 @@ def default_stages(scenario: Scenario, decider: Decider) -> Stages:
 
 
 def chunk_bounds(n_steps: int) -> NDArray[np.int64]:
-    """Tick boundaries of the chunks of a run of ``n_steps`` steps (ticks 0 .. n_steps)."""
+    """Tick boundaries of the chunks of a run of ``n_steps`` steps (ticks 0 .. n_steps).
+
+    Examples
+    --------
+    >>> from firefleet.sim.loop import CHUNKS, chunk_bounds
+    >>> chunk_bounds(5).tolist()
+    [0, 1, 2, 3, 4, 5, 6]
+    >>> CHUNKS, len(chunk_bounds(1000)) - 1
+    (100, 100)
+    """
     return np.unique(np.linspace(0, n_steps + 1, CHUNKS + 1).astype(np.int64))
 
 
@@ -360,6 +380,18 @@ def run_loop(
     -------
     SimResult
         The recorded run; ``extra`` holds the decision's series, time first.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet import load_scenario
+    >>> from firefleet.sim.loop import run_loop
+    >>> from firefleet.sim.registry import task_kind
+    >>> scenario = load_scenario("motor-pid")
+    >>> decider = task_kind(scenario.command.kind).decider
+    >>> result = run_loop(scenario, decider, np.array([0, 100, scenario.n_steps]))
+    >>> result.t.tolist(), result.pose.shape, scenario.n_steps * scenario.dt_s
+    ([0.0, 1.0, 10.0], (3, 1, 3), 10.0)
     """
     rng = np.random.default_rng(scenario.seed)
     n = scenario.n_robots
@@ -457,6 +489,22 @@ def run_staged(
     Returns
     -------
     Recording
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.pid import PidParams
+    >>> from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+    >>> from firefleet.sim.drive import discretise_drive, drive_init
+    >>> from firefleet.sim.loop import Stages, StaticWorld, WheelCommand, run_staged
+    >>> stack = discretise_drive(RobotGeometry(), MotorParams(), PidParams(), EncoderParams(), 0.01)
+    >>> def decide(state, inputs, params, dt_s):  # both wheels at 10 rad/s, always
+    ...     return state, WheelCommand(reference_rad_s=np.full((1, 2), 10.0))
+    >>> start = drive_init(np.zeros((1, 3)), np.zeros((1, 2)), stack)
+    >>> stages = Stages(world=StaticWorld())
+    >>> rec = run_staged(start, stack, stages, decide, None, None, np.array([0, 200]), 200)
+    >>> rec.t_s.tolist(), rec.pose.shape, round(float(rec.wheel_speed_rad_s[-1, 0, 0]), 1)
+    ([0.0, 2.0], (2, 1, 3), 10.0)
     """
     dt = stack.dt_s
     n = drive.pose.shape[0]

@@ -51,6 +51,15 @@ def settling_time(
     float
         Seconds (0 if never outside, ``inf`` if still outside at the end), with the
         last exit interpolated linearly between samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.metrics import settling_time
+    >>> t = np.linspace(0.0, 5.0, 50001)
+    >>> # first order, tau = 1 s: the 2 % band at tau ln(50)
+    >>> round(settling_time(t, 1.0 - np.exp(-t), 1.0), 4), round(float(np.log(50.0)), 4)
+    (3.912, 3.912)
     """
     t = as_float_array(t_s, "t_s", (None,))
     yy = as_float_array(y, "y", (t.shape[0],))
@@ -75,6 +84,15 @@ def recovery_time(
 
     Only samples at or after ``t_event_s`` count. Returns 0 if ``y`` never leaves the
     band, ``inf`` if it has not come back by the end.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.metrics import recovery_time
+    >>> t = np.linspace(0.0, 5.0, 50001)
+    >>> y = np.where(t < 1.0, 1.0, 1.0 - 0.5 * np.exp(-(t - 1.0)))  # a dip at 1 s, tau = 1 s
+    >>> round(recovery_time(t, y, 1.0, 1.0), 4), round(float(np.log(25.0)), 4)
+    (3.2189, 3.2189)
     """
     t = as_float_array(t_s, "t_s", (None,))
     yy = as_float_array(y, "y", (t.shape[0],))
@@ -106,6 +124,15 @@ def step_response_info(
         ``rise_time_s`` (``inf`` if 90 % is never reached), ``settling_time_s``,
         ``overshoot_pct`` (peak beyond the target, percent of the target, >= 0).
         Crossings are interpolated linearly between samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.metrics import step_response_info
+    >>> t = np.linspace(0.0, 5.0, 50001)
+    >>> info = step_response_info(t, 2.0 * (1.0 - np.exp(-t)), 2.0)
+    >>> round(info["rise_time_s"], 4), round(float(np.log(9.0)), 4), info["overshoot_pct"]
+    (2.1972, 2.1972, 0.0)
     """
     t = as_float_array(t_s, "t_s", (None,))
     yy = as_float_array(y, "y", (t.shape[0],))
@@ -131,6 +158,13 @@ def compute_metrics(result: SimResult) -> Metrics:
 
     The names are ``result.scenario.metric_names``
     (:attr:`firefleet.sim.registry.TaskKind.metric_names`).
+
+    Examples
+    --------
+    >>> import firefleet
+    >>> result = firefleet.simulate(firefleet.load_scenario("motor-open-loop"), record_every=100)
+    >>> sorted(firefleet.compute_metrics(result)) == sorted(result.scenario.metric_names)
+    True
     """
     return task_kind(result.scenario.command.kind).metrics(result)
 
@@ -142,6 +176,15 @@ def metrics_document(
 
     Each claim is ``{"name", "expected", "measured", "passed", "source"}``; ``name`` is
     the metric, with ``[robot k]`` for a claim on one robot of a per-robot metric.
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import Claim
+    >>> from firefleet.sim.metrics import metrics_document
+    >>> claim = Claim(metric="rise_time_s", op="<=", value=0.2)
+    >>> doc = metrics_document("demo", (claim,), {"rise_time_s": 0.1})
+    >>> doc["scenario"], doc["claims"][0]["passed"], doc["rise_time_s"]
+    ('demo', True, 0.1)
     """
     checked = [
         {

@@ -70,6 +70,13 @@ class TaskKind:
     runner : callable, optional
         For a kind that runs its own loop instead of a ``decider`` (exactly one of the
         two): ``runner(scenario, rec_steps, progress) -> SimResult``.
+
+    Examples
+    --------
+    >>> from firefleet.sim.registry import task_kind
+    >>> kind = task_kind("path-following")
+    >>> kind.name, kind.decider is not None, kind.runner is None
+    ('path-following', True, True)
     """
 
     name: str
@@ -138,6 +145,16 @@ def register(kind: TaskKind) -> None:
     ------
     InputError
         If a kind of that name exists already.
+
+    Examples
+    --------
+    >>> from firefleet.errors import InputError
+    >>> from firefleet.sim.registry import register, task_kind
+    >>> try:
+    ...     register(task_kind("wheel-speed-step"))
+    ... except InputError as error:
+    ...     print(error)
+    task kind 'wheel-speed-step' is registered already
     """
     if kind.name in _builtin() or kind.name in _REGISTERED:
         raise InputError(f"task kind {kind.name!r} is registered already")
@@ -145,7 +162,14 @@ def register(kind: TaskKind) -> None:
 
 
 def kind_names() -> tuple[str, ...]:
-    """Names of every known task kind, sorted."""
+    """Names of every known task kind, sorted.
+
+    Examples
+    --------
+    >>> from firefleet.sim.registry import kind_names
+    >>> "wheel-speed-step" in kind_names(), kind_names() == tuple(sorted(kind_names()))
+    (True, True)
+    """
     return tuple(sorted({*_builtin(), *_REGISTERED}))
 
 
@@ -156,6 +180,12 @@ def task_kind(name: str) -> TaskKind:
     ------
     InputError
         For an unknown kind, listing the known ones.
+
+    Examples
+    --------
+    >>> from firefleet.sim.registry import task_kind
+    >>> task_kind("formation").name
+    'formation'
     """
     kind = _builtin().get(name) or _REGISTERED.get(name)
     if kind is None:

@@ -46,6 +46,15 @@ class SimResult:
 
     Robots without wheels (point masses) have wheel arrays of shape (T, N, 0), and
     ``result.npz`` leaves those out.
+
+    Examples
+    --------
+    >>> import firefleet
+    >>> result = firefleet.simulate(firefleet.load_scenario("motor-pid"), record_every=100)
+    >>> result.t.shape, result.pose.shape, result.wheel_speed_rad_s.shape
+    ((11,), (11, 1, 3), (11, 1, 2))
+    >>> sorted(result.arrays())[:3]
+    ['current_a', 'load_torque_n_m', 'pose']
     """
 
     scenario: Scenario

@@ -58,6 +58,13 @@ class ThermalScene:
         Ceiling temperature [C], at ``wall_height_m``; ``None``: open sky above.
     sky_c : float
         Apparent temperature of whatever no ray hits [C] (a clear sky is cold).
+
+    Examples
+    --------
+    >>> from firefleet.sim.sensors import ThermalScene
+    >>> scene = ThermalScene(walls_m=[[0.0, -1.0, 0.0, 1.0]], wall_temp_c=[30.0])
+    >>> scene.walls_m.shape, scene.object_xy_m.shape, scene.floor_c
+    ((1, 4), (0, 2), 20.0)
     """
 
     walls_m: FloatArray = field(default_factory=lambda: np.zeros((0, 4)))
@@ -119,6 +126,13 @@ class ThermalCameraParams:
         up to about 400-450 C).
     resolution_k : float
         Quantisation step [K] (TLinear: 0.01); 0 for none.
+
+    Examples
+    --------
+    >>> from firefleet.sim.sensors import ThermalCameraParams
+    >>> params = ThermalCameraParams(column_fpn_k=0.0)
+    >>> params.column_offsets_k.shape, float(abs(params.column_offsets_k).max())
+    ((80,), 0.0)
     """
 
     camera: CameraModel = field(default_factory=CameraModel)
@@ -200,6 +214,17 @@ def render_thermal(
     -------
     ndarray, shape (N, H, W)
         Apparent temperatures [C] as the camera reports them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.sensors import ThermalCameraParams, ThermalScene, render_thermal
+    >>> box = [[-5, -5, 5, -5], [5, -5, 5, 5], [5, 5, -5, 5], [-5, 5, -5, -5]]
+    >>> scene = ThermalScene(walls_m=box, wall_temp_c=[25.0] * 4, floor_c=25.0, ceiling_c=25.0)
+    >>> quiet = ThermalCameraParams(netd_k=0.0, column_fpn_k=0.0, resolution_k=0.0)
+    >>> frames = render_thermal(scene, [[0.0, 0.0, 0.0]], quiet, rng=np.random.default_rng(0))
+    >>> frames.shape, round(float(frames.min()), 6), round(float(frames.max()), 6)
+    ((1, 60, 80), 25.0, 25.0)
     """
     prm = ThermalCameraParams() if params is None else params
     pose = as_float_array(poses, "poses", (None, 3))

@@ -103,6 +103,16 @@ class RangeBearingSensor:
         Mean number of spurious detections per frame (Poisson), uniform over the view.
     frame_steps : int
         Control periods per camera frame (12 at 10 ms: 8.3 Hz, under the Lepton's 8.7 Hz).
+
+    Examples
+    --------
+    >>> import math
+    >>> from firefleet.sim.world import RangeBearingSensor
+    >>> sensor = RangeBearingSensor(range_sigma_m=0.1, bearing_sigma_deg=1.0)
+    >>> round(sensor.fov_rad, 4), sensor.covariance.shape
+    (0.8901, (2, 2))
+    >>> bool(sensor.covariance[1, 1] == math.radians(1.0) ** 2)
+    True
     """
 
     fov_deg: float = 51.0
@@ -171,6 +181,12 @@ class DriveParams:
         Distance along the loop between landmarks [m].
     landmark_offset_m : tuple of float
         Range of the landmarks' distance from the path [m], alternating sides.
+
+    Examples
+    --------
+    >>> from firefleet.sim.world import DriveParams
+    >>> round(DriveParams().loop_length_m, 3)  # 2 (25 + 15.575) + 2 pi 3
+    100.0
     """
 
     straight_x_m: float = 25.0
@@ -227,6 +243,14 @@ def loop_path(params: DriveParams, *, spacing_m: float = 0.02) -> FloatArray:
 
     The loop starts at the middle of its bottom side heading +x, so the robot starts at
     the origin of the log's frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.world import DriveParams, loop_path
+    >>> path = loop_path(DriveParams(), spacing_m=0.5)
+    >>> path.shape, path[0].tolist(), path[1].tolist()
+    ((200, 2), [0.0, 0.0], [0.5, 0.0])
     """
     a, b, rc = params.straight_x_m, params.straight_y_m, params.corner_radius_m
     s = np.arange(0.0, params.loop_length_m, spacing_m)
@@ -267,6 +291,13 @@ def loop_landmarks(params: DriveParams, rng: np.random.Generator) -> FloatArray:
 
     One every ``landmark_spacing_m`` of path, at a distance drawn uniformly in
     ``landmark_offset_m`` from the path, on alternating sides.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.world import DriveParams, loop_landmarks
+    >>> loop_landmarks(DriveParams(landmark_spacing_m=2.0), np.random.default_rng(0)).shape
+    (50, 2)
     """
     path = loop_path(params, spacing_m=0.02)
     step = max(round(params.landmark_spacing_m / 0.02), 1)
@@ -296,6 +327,15 @@ class DriveResult:
         True pose at each frame.
     odometry_pose : ndarray, shape (T, 3)
         Dead-reckoned pose from the encoders at each frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.world import DriveParams, simulate_drive
+    >>> small = DriveParams(straight_x_m=2.0, straight_y_m=1.0, corner_radius_m=1.0, laps=0.1)
+    >>> drive = simulate_drive(np.random.default_rng(0), params=small)
+    >>> drive.truth.shape == drive.odometry_pose.shape == (drive.t_s.size, 3)
+    True
     """
 
     log: SlamLog
@@ -368,6 +408,15 @@ def simulate_drive(
     Returns
     -------
     DriveResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.world import DriveParams, simulate_drive
+    >>> small = DriveParams(straight_x_m=2.0, straight_y_m=1.0, corner_radius_m=1.0, laps=0.1)
+    >>> drive = simulate_drive(np.random.default_rng(0), params=small)
+    >>> drive.truth[0].tolist(), drive.landmarks.shape[1]
+    ([0.0, 0.0, 0.0], 2)
     """
     prm = params or DriveParams()
     sensor = prm.sensor

@@ -67,6 +67,13 @@ def formation_force_and_stiffness(
         spacing law's ``K_s (2 + max |g+ - g-|)`` (its Jacobian is similar, by the
         robots' radii, to one of spectral radius 2 K_s; the rest is the turning of the
         tangent and the radius' lever).
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import FormationParams, formation_force_and_stiffness
+    >>> f, k = formation_force_and_stiffness([[3.0, 0.0]], [0.0, 0.0], FormationParams(alpha_m=3.0))
+    >>> (f + 0.0).tolist(), k  # on the circle: no force, radial stiffness 2 a alpha^2
+    ([[0.0, 0.0]], 18.0)
     """
     p = _positions(pos)
     n = p.shape[0]
@@ -228,6 +235,14 @@ def formation_force(
     -------
     ndarray, shape (N, 2)
         Force [N] (zero for inactive robots).
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import FormationParams, formation_force
+    >>> # two robots on the 3 m circle: no attraction, Coulomb 10 / 6^2 N outwards
+    >>> f = formation_force([[3.0, 0.0], [-3.0, 0.0]], [0.0, 0.0], FormationParams(alpha_m=3.0))
+    >>> f.round(4).tolist(), round(10 / 36, 4)
+    ([[0.2778, 0.0], [-0.2778, 0.0]], 0.2778)
     """
     return formation_force_and_stiffness(
         pos,

@@ -54,6 +54,13 @@ class FormationParams:
         Gain of the FIRAS contact and obstacle forces [N m^2], >= 0.
     contact_range_m : float
         Body gap below which the FIRAS force acts [m], > 0.
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import FormationParams
+    >>> p = FormationParams(alpha_m=2.0)
+    >>> p.alpha_m, p.k_r, p.charge_c
+    (2.0, 10.0, 1.0)
     """
 
     alpha_m: float = 3.0
@@ -120,6 +127,15 @@ def circle_attraction(
     -------
     ndarray, shape (N, 2)
         ``-a (p - c) (|p - c|^2 - alpha^2)`` [N], scaled down to ``limit_n`` where larger.
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import circle_attraction
+    >>> # -a (p - c)(|p - c|^2 - alpha^2): -1 * 2 * (4 - 1) = -6 N at 2 m from a 1 m circle
+    >>> (circle_attraction([[2.0, 0.0], [0.0, 1.0]], [0.0, 0.0], alpha_m=1.0) + 0.0).tolist()
+    [[-6.0, 0.0], [0.0, 0.0]]
+    >>> (circle_attraction([[2.0, 0.0]], [0.0, 0.0], alpha_m=1.0, limit_n=4.0) + 0.0).tolist()
+    [[-4.0, 0.0]]
     """
     p = _positions(pos)
     c = as_float_array(leader_xy, "leader_xy", (2,))
@@ -201,6 +217,13 @@ def coulomb_repulsion(
         ``F_k = k_r q_k sum_{i != k} q_i (p_k - p_i) / |p_k - p_i|^3`` [N]: magnitude
         ``k_r q_k q_i / r^2`` per pair (eq. 7), summed over the team (eq. 8). Coincident
         robots (r = 0) exert no force on each other (the direction is undefined).
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import coulomb_repulsion
+    >>> # k_r q^2 / r^2 = 10 / 4 = 2.5 N, pushing the two robots apart
+    >>> coulomb_repulsion([[0.0, 0.0], [2.0, 0.0]], k_r=10.0).tolist()
+    [[-2.5, 0.0], [2.5, 0.0]]
     """
     p = _positions(pos)
     q = _charges(charge, p.shape[0])
@@ -248,6 +271,14 @@ def contact_repulsion(
     -----
     The pairs within reach come from a k-d tree (``scipy.spatial.cKDTree``), in
     O(N log N) time and O(pairs) memory.
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import contact_repulsion
+    >>> # gap g = 1 - 2 * 0.375 = 0.25 m: eta (1/g - 1/rho) / g^2 = (4 - 2) / 0.0625 = 32 N
+    >>> f = contact_repulsion([[0.0, 0.0], [1.0, 0.0]], radius_m=0.375, range_m=0.5, gain=1.0)
+    >>> f.round(12).tolist()
+    [[-32.0, 0.0], [32.0, 0.0]]
     """
     return _contact(_positions(pos), radius_m=radius_m, range_m=range_m, gain=gain)[0]
 
@@ -279,6 +310,16 @@ def obstacle_repulsion(
     ndarray, shape (N, 2)
         Sum over the obstacles of ``eta (1/g - 1/rho) / g^2`` along the outward normal,
         with gap ``g = |p - o| - R - R_o`` [N].
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import obstacle_repulsion
+    >>> # gap 1 - 0.25 - 0.5 = 0.25 m: (1/0.25 - 1/0.5) / 0.25^2 = 32 N, away from the obstacle
+    >>> f = obstacle_repulsion(
+    ...     [[1.0, 0.0]], [[0.0, 0.0]], [0.5], robot_radius_m=0.25, range_m=0.5, gain=1.0
+    ... )
+    >>> f.round(12).tolist()
+    [[32.0, 0.0]]
     """
     p = _positions(pos)
     o = as_float_array(centres_m, "centres_m", (None, 2))
@@ -308,6 +349,12 @@ def tangential_part(force: ArrayLike, pos: ArrayLike, leader_xy: ArrayLike) -> F
     ndarray, shape (N, 2)
         ``(f . t) t`` with ``t`` the unit tangent at the robot (0 for a robot on the
         leader, where the tangent is undefined).
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import tangential_part
+    >>> (tangential_part([[1.0, 1.0]], [[1.0, 0.0]], [0.0, 0.0]).round(12) + 0.0).tolist()
+    [[0.0, 1.0]]
     """
     f = _positions(force, "force")
     p = _positions(pos)
@@ -416,6 +463,12 @@ def contact_pairs(pos: ArrayLike, reach_m: float) -> NDArray[np.intp]:
     Found with a reach ``2 R + rho + s`` (a skin s), the list stays a superset of the
     pairs within ``2 R + rho`` until some robot has moved s / 2 (Verlet's neighbour
     list, Phys. Rev. 159, 1967); the runner rebuilds it only then.
+
+    Examples
+    --------
+    >>> from firefleet.control.formation import contact_pairs
+    >>> contact_pairs([[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]], 1.5).tolist()
+    [[0, 1]]
     """
     p = _positions(pos)
     if p.shape[0] < 2:

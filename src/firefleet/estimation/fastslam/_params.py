@@ -66,6 +66,13 @@ class FastSlamParams:
         With unknown association, the final map keeps the landmarks whose evidence
         (times seen minus times missed in view) reached this count: a spurious detection
         at the edge of the view, never counted as missed, is seen once.
+
+    Examples
+    --------
+    >>> from firefleet.estimation import FastSlamParams
+    >>> params = FastSlamParams(n_particles=50, version=2)
+    >>> params.n_particles, params.version, params.association
+    (50, 2, 'known')
     """
 
     n_particles: int = 100
@@ -109,6 +116,14 @@ class SensorView:
         Full horizontal field of view [rad], centred on the heading.
     max_range_m : float
         Detection range [m].
+
+    Examples
+    --------
+    >>> import math
+    >>> from firefleet.estimation import SensorView
+    >>> view = SensorView(fov_rad=math.radians(51.0), max_range_m=12.0)
+    >>> round(view.fov_rad, 4), view.max_range_m
+    (0.8901, 12.0)
     """
 
     fov_rad: float

@@ -56,6 +56,18 @@ class FastSlamResult:
     calibration : ndarray, shape (2,), or None
         The best particle's odometry calibration at the end: heading drift [rad/m] and
         turn scale error [-]; None when not estimated.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation import FastSlamParams, run_fastslam
+    >>> from firefleet.estimation.logs import parse_log
+    >>> odometry = "ODOMETRY {} {} 1 0 0 1e-4 0 0 1e-4 0 1e-6"
+    >>> lines = [odometry.format(0, 1), odometry.format(1, 2), "LANDMARK 1 7 3 1 0.01 0 0.01"]
+    >>> log = parse_log(lines)
+    >>> result = run_fastslam(log, np.random.default_rng(0), params=FastSlamParams(n_particles=20))
+    >>> result.trajectory.shape, result.landmark_ids.tolist(), result.dead_reckoning[-1].tolist()
+    ((3, 3), [7], [2.0, 0.0, 0.0])
     """
 
     params: FastSlamParams
@@ -140,6 +152,19 @@ def run_fastslam(
     Returns
     -------
     FastSlamResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation import FastSlamParams, run_fastslam
+    >>> from firefleet.estimation.logs import parse_log
+    >>> odometry = "ODOMETRY {} {} 1 0 0 1e-4 0 0 1e-4 0 1e-6"
+    >>> lines = [odometry.format(0, 1), odometry.format(1, 2)]
+    >>> lines += ["LANDMARK 1 7 3 1 0.01 0 0.01", "LANDMARK 2 7 2 1 0.01 0 0.01"]  # at (4, 1)
+    >>> params = FastSlamParams(n_particles=20)
+    >>> result = run_fastslam(parse_log(lines), np.random.default_rng(0), params=params)
+    >>> result.landmarks.round(1).tolist()
+    [[4.0, 1.0]]
     """
     prm = params or FastSlamParams()
     known = prm.association == "known"

@@ -43,6 +43,14 @@ class FastSlamState:
     calibration : ndarray, shape (P, 2), or None
         Each particle's odometry calibration: heading drift k_d [rad/m] and turn scale
         error k_b [-] (see :class:`FastSlamParams`); None when not estimated.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation import fastslam_init
+    >>> state = fastslam_init(10, landmark_ids=np.array([3, 7]))
+    >>> state.poses.shape, state.mu.shape, state.sigma.shape
+    ((10, 3), (10, 2, 2), (10, 2, 2, 2))
     """
 
     poses: FloatArray
@@ -99,6 +107,13 @@ def fastslam_init(
     Returns
     -------
     FastSlamState
+
+    Examples
+    --------
+    >>> from firefleet.estimation import fastslam_init
+    >>> state = fastslam_init(4, pose=(1.0, 2.0, 0.5))
+    >>> state.poses.tolist()[0], bool(state.active.any())
+    ([1.0, 2.0, 0.5], False)
     """
     if n_particles < 1:
         raise InputError(f"n_particles must be >= 1, got {n_particles}")

@@ -60,6 +60,17 @@ def fastslam_step(
     resampled : ndarray of int64, shape (P,), or None
         The resampling indices (the new particle i descends from old particle
         ``resampled[i]``), or None when the step did not resample.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation import FastSlamParams, fastslam_init, fastslam_step
+    >>> state = fastslam_init(20, landmark_ids=np.array([7]))
+    >>> z, z_cov = np.array([[5.0, 0.0]]), np.eye(2)[None] * 0.01  # landmark 7, 5 m ahead
+    >>> rng, params = np.random.default_rng(0), FastSlamParams(n_particles=20)
+    >>> _ = fastslam_step(state, None, None, z, z_cov, np.array([7]), rng, params=params)
+    >>> state.mu[:, 0].round(6).tolist()[0], bool(state.active[:, 0].all())
+    ([5.0, 0.0], True)
     """
     known = params.association == "known"
     if known:

@@ -84,6 +84,17 @@ def slam_summary(log: SlamLog, result: FastSlamResult) -> dict[str, float]:
         ``run_time_s``; with odometry calibration ``heading_drift_rad_per_m`` and
         ``turn_scale_error`` (the best particle's); with ground truth the errors above,
         ``true_landmarks_seen``, ``duplicate_landmarks`` and ``spurious_landmarks``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.estimation import FastSlamParams, run_fastslam, slam_summary
+    >>> from firefleet.estimation.logs import parse_log
+    >>> log = parse_log(["ODOMETRY 0 1 1 0 0 1e-4 0 0 1e-4 0 1e-6", "LANDMARK 1 7 3 1 0.01 0 0.01"])
+    >>> result = run_fastslam(log, np.random.default_rng(0), params=FastSlamParams(n_particles=10))
+    >>> summary = slam_summary(log, result)
+    >>> summary["poses"], summary["observations"], summary["landmarks"], summary["particles"]
+    (2, 1, 1, 10)
     """
     p = result.params
     doc: dict[str, float] = {
@@ -156,6 +167,19 @@ def slam_claims(summary: Mapping[str, float], *, association: str) -> tuple[Clai
     -------
     tuple of firefleet.scenarios.schema.Claim
         Checked against ``summary`` like every scenario's claims (``Claim.holds``).
+
+    Examples
+    --------
+    >>> from firefleet.estimation import slam_claims
+    >>> summary = {"position_rms_m": 0.2, "landmark_rms_m": 0.3,
+    ...            "odometry_position_rms_m": 1.0, "odometry_landmark_rms_m": 1.0}
+    >>> claims = slam_claims(summary, association="known")
+    >>> [claim.metric for claim in claims]
+    ['position_rms_m', 'landmark_rms_m']
+    >>> [claim.value for claim in claims], [claim.holds(summary[claim.metric]) for claim in claims]
+    ([0.5, 0.5], [True, True])
+    >>> slam_claims({"poses": 3}, association="known")  # no ground truth, no claims
+    ()
     """
     from firefleet.scenarios.schema import Claim
 

@@ -48,6 +48,17 @@ class StereoCalibration:
         side-by-side rig ``t`` is about ``(-B, 0, 0)``.
     rms_px : float
         RMS reprojection error of the stereo calibration [px] (NaN if unknown).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import StereoCalibration
+    >>> k = np.array([[100.0, 0.0, 79.5], [0.0, 100.0, 59.5], [0.0, 0.0, 1.0]])
+    >>> calib = StereoCalibration(image_size=(160, 120), k_left=k, dist_left=np.zeros(5),
+    ...     k_right=k, dist_right=np.zeros(5), rotation=np.eye(3),
+    ...     translation_m=np.array([-0.1, 0.0, 0.0]))
+    >>> calib.image_size, float(np.linalg.norm(calib.translation_m))
+    ((160, 120), 0.1)
     """
 
     image_size: tuple[int, int]
@@ -106,6 +117,18 @@ def calibration_yaml(calib: StereoCalibration) -> str:
     of 3) [px] and ``distortion`` ``[k1, k2, p1, p2, k3]``; ``rotation`` (3 rows of 3)
     and ``translation_m`` ``[tx, ty, tz]`` [m] from the left camera's frame to the
     right's; ``rms_reprojection_px`` (null if unknown).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import CALIBRATION_FORMAT, StereoCalibration
+    >>> from firefleet.perception.stereo import calibration_yaml
+    >>> k = np.array([[100.0, 0.0, 79.5], [0.0, 100.0, 59.5], [0.0, 0.0, 1.0]])
+    >>> calib = StereoCalibration(image_size=(160, 120), k_left=k, dist_left=np.zeros(5),
+    ...     k_right=k, dist_right=np.zeros(5), rotation=np.eye(3),
+    ...     translation_m=np.array([-0.1, 0.0, 0.0]))
+    >>> CALIBRATION_FORMAT in calibration_yaml(calib)
+    True
     """
     doc = {
         "format": CALIBRATION_FORMAT,
@@ -133,6 +156,24 @@ def load_calibration(path: str | Path) -> StereoCalibration:
     InputError
         If the file is missing, not YAML, not of this format, or a field is missing or
         malformed (the message names it).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import StereoCalibration, calibration_yaml
+    >>> from firefleet.perception.stereo import load_calibration
+    >>> k = np.array([[100.0, 0.0, 79.5], [0.0, 100.0, 59.5], [0.0, 0.0, 1.0]])
+    >>> calib = StereoCalibration(image_size=(160, 120), k_left=k, dist_left=np.zeros(5),
+    ...     k_right=k, dist_right=np.zeros(5), rotation=np.eye(3),
+    ...     translation_m=np.array([-0.1, 0.0, 0.0]))
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(folder.name) / "rig.yaml"
+    >>> _ = path.write_text(calibration_yaml(calib))
+    >>> again = load_calibration(path)
+    >>> again.image_size, bool(np.array_equal(again.k_left, k)), again.translation_m.tolist()
+    ((160, 120), True, [-0.1, 0.0, 0.0])
+    >>> folder.cleanup()
     """
     p = Path(path)
     if not p.is_file():
@@ -186,6 +227,17 @@ def find_chessboard(
     -------
     ndarray of float32, shape (columns * rows, 2) or None
         Corner positions [px], row by row (OpenCV's order).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import find_chessboard
+    >>> squares = np.kron(np.indices((7, 10)).sum(0) % 2 * 255, np.ones((20, 20)))
+    >>> board = np.pad(squares.astype(np.uint8), 20, constant_values=255)  # 9 x 6 inner corners
+    >>> find_chessboard(board, pattern_size=(9, 6)).shape
+    (54, 2)
+    >>> find_chessboard(np.full((100, 100), 255, np.uint8)) is None
+    True
     """
     grey = _grey(_check_image(image, "chessboard image"))
     flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
@@ -230,6 +282,19 @@ def calibrate_stereo(
     InputError
         If the sequences differ in length, images differ in size, or fewer than three
         pairs show the whole board in both images.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.errors import InputError
+    >>> from firefleet.perception.stereo import calibrate_stereo
+    >>> squares = np.kron(np.indices((7, 10)).sum(0) % 2 * 255, np.ones((20, 20)))
+    >>> board = np.pad(squares.astype(np.uint8), 20, constant_values=255)
+    >>> try:  # one view of the board is not enough
+    ...     calibrate_stereo([board], [board])
+    ... except InputError as error:
+    ...     print(error)
+    calibration needs at least 3 pairs showing the whole 9 x 6 board in both images, found 1
     """
     if len(left_images) != len(right_images):
         raise InputError(

@@ -41,6 +41,15 @@ class DisparityResult:
     textureless : ndarray of bool, shape (H, W), or None
         True where the left image has too little horizontal texture to match (a flat
         area wider than the matching window); not ``measured``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import compute_disparity
+    >>> left = (np.random.default_rng(0).random((120, 160)) * 255).astype(np.uint8)
+    >>> result = compute_disparity(left, np.roll(left, -8, axis=1), num_disparities=32)
+    >>> result.disparity.shape, result.measured.dtype, result.confidence.dtype
+    ((120, 160), dtype('bool'), dtype('float32'))
     """
 
     disparity: Float32Array
@@ -121,6 +130,15 @@ def sgbm_disparity(
     -------
     ndarray of float32, shape (H, W)
         Disparity [px] (1/16 px steps), NaN where SGBM gives none.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import sgbm_disparity
+    >>> left = (np.random.default_rng(0).random((120, 160)) * 255).astype(np.uint8)
+    >>> right = np.roll(left, -8, axis=1)  # everything 8 px to the left in the right image
+    >>> float(np.nanmedian(sgbm_disparity(left, right, num_disparities=32)[:, 40:]))
+    8.0
     """
     lft, rgt = check_pair(left, right)
     return _sgbm_raw(
@@ -196,6 +214,15 @@ def texture(image: ArrayLike, *, window_px: int = 7) -> Float32Array:
     Returns
     -------
     ndarray of float32, shape (H, W)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import texture
+    >>> flat = np.full((20, 30), 128, np.uint8)
+    >>> noisy = (np.random.default_rng(0).random((20, 30)) * 255).astype(np.uint8)
+    >>> float(texture(flat).max()), bool(texture(noisy).mean() > 10)
+    (0.0, True)
     """
     img = _check_image(image, "image")
     if window_px < 1 or window_px % 2 == 0:
@@ -264,6 +291,15 @@ def compute_disparity(
     Returns
     -------
     DisparityResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import compute_disparity
+    >>> left = (np.random.default_rng(0).random((120, 160)) * 255).astype(np.uint8)
+    >>> result = compute_disparity(left, np.roll(left, -8, axis=1), num_disparities=32)
+    >>> float(np.nanmedian(result.disparity[result.measured]))
+    8.0
     """
     lft, rgt = check_pair(left, right)
     if median_px not in (0, 3, 5):

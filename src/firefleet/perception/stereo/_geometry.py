@@ -33,6 +33,15 @@ def depth_from_disparity(
     -------
     ndarray of float32, shape (H, W)
         Depth [m]; NaN where the disparity is NaN or ``d + d_offs <= 0`` (at infinity).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import depth_from_disparity
+    >>> disparity = np.array([[20.0, 0.0, np.nan]])
+    >>> depth = depth_from_disparity(disparity, focal_px=600.0, baseline_m=0.1)
+    >>> depth.tolist()  # f B / d: 600 * 0.1 / 20 = 3 m
+    [[3.0, nan, nan]]
     """
     d = np.asarray(disparity, dtype=np.float32)
     if d.ndim != 2:
@@ -81,6 +90,15 @@ def point_cloud(
         [m].
     rgb : ndarray of uint8, shape (M, 3)
         Colours as RGB (grey 128 if none were given).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import point_cloud
+    >>> disparity = np.full((3, 3), 20.0)
+    >>> points, rgb = point_cloud(disparity, focal_px=600.0, baseline_m=0.1, cx_px=1.0, cy_px=1.0)
+    >>> points.shape, points[4].round(6).tolist(), rgb[0].tolist()  # the centre pixel at 3 m
+    ((9, 3), [0.0, 0.0, 3.0], [128, 128, 128])
     """
     z = depth_from_disparity(disparity, focal_px=focal_px, baseline_m=baseline_m, doffs_px=doffs_px)
     keep = ~np.isnan(z)
@@ -114,6 +132,14 @@ def ply_bytes(points: ArrayLike, colors: ArrayLike | None = None) -> bytes:
     points : array_like, shape (M, 3)
     colors : array_like of uint8, shape (M, 3), optional
         RGB.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import ply_bytes
+    >>> data = ply_bytes(np.zeros((2, 3)))
+    >>> data.splitlines()[0], b"element vertex 2" in data
+    (b'ply', True)
     """
     pts = as_float_array(points, "points", (None, 3))
     fields: list[tuple[str, str]] = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
@@ -157,6 +183,14 @@ class RangeScan:
         [m]; ``inf`` where the sector holds no point.
     count : ndarray of int, shape (K,)
         Points in each sector.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import range_scan
+    >>> scan = range_scan([[0.0, 0.0, 2.0]], n_sectors=4, fov_rad=np.pi / 2)
+    >>> scan.bearing_rad.shape, scan.edges_rad.shape, scan.count.tolist()
+    ((4,), (5,), [0, 0, 1, 0])
     """
 
     bearing_rad: FloatArray
@@ -211,6 +245,15 @@ def range_scan(
     Returns
     -------
     RangeScan
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import range_scan
+    >>> points = [[0.0, 0.0, 2.0], [0.1, 0.0, 3.0]]  # x right, y down, z ahead [m]
+    >>> scan = range_scan(points, n_sectors=2, fov_rad=np.pi / 2)
+    >>> scan.range_m.round(4).tolist(), scan.count.tolist()
+    ([3.0017, 2.0], [1, 1])
     """
     pts = as_float_array(points, "points", (None, 3))
     if n_sectors < 1:

@@ -23,6 +23,20 @@ def read_image(path: str | Path) -> Image:
     ------
     InputError
         If the file is missing, empty or not an image OpenCV can decode.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import cv2
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import read_image
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(folder.name) / "grey.png"
+    >>> _ = cv2.imwrite(str(path), np.full((4, 6), 200, np.uint8))
+    >>> image = read_image(path)
+    >>> image.shape[:2], image.dtype
+    ((4, 6), dtype('uint8'))
+    >>> folder.cleanup()
     """
     p = Path(path)
     if not p.is_file():
@@ -62,6 +76,18 @@ def check_pair(left: ArrayLike, right: ArrayLike) -> tuple[Image, Image]:
     ------
     InputError
         If an image is not ``uint8`` grey or 3-channel, or the two differ in shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.errors import InputError
+    >>> from firefleet.perception.stereo import check_pair
+    >>> left, right = check_pair(np.zeros((120, 160), np.uint8), np.zeros((120, 160), np.uint8))
+    >>> try:
+    ...     check_pair(np.zeros((120, 160), np.uint8), np.zeros((120, 161), np.uint8))
+    ... except InputError as error:
+    ...     print(error)
+    left and right images differ in size: 160 x 120 vs 161 x 120 px
     """
     lft, rgt = _check_image(left, "left image"), _check_image(right, "right image")
     if lft.shape != rgt.shape:

@@ -49,6 +49,16 @@ class StereoRun:
         Virtual range scan of ``points`` (None if no depth).
     summary : dict
         Named numbers (SI units, unit in the key's suffix) for ``summary.json``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import process_pair
+    >>> left = (np.random.default_rng(0).random((120, 160)) * 255).astype(np.uint8)
+    >>> run = process_pair(left, np.roll(left, -8, axis=1), mode="rectified", focal_px=600.0,
+    ...                    baseline_m=0.1, num_disparities=32)
+    >>> run.rect_left.shape, run.depth_m.shape, run.points.shape[1], "measured_pct" in run.summary
+    ((120, 160), (120, 160), 3, True)
     """
 
     rect_left: Image
@@ -247,6 +257,16 @@ def process_pair(
     InputError
         On a bad pair, a calibration for another image size, a missing calibration, or
         a failed uncalibrated rectification.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import process_pair
+    >>> left = (np.random.default_rng(0).random((120, 160)) * 255).astype(np.uint8)
+    >>> run = process_pair(left, np.roll(left, -8, axis=1), mode="rectified", focal_px=600.0,
+    ...                    baseline_m=0.1, num_disparities=32)
+    >>> round(run.summary["depth_median_m"], 3)  # f B / d = 600 * 0.1 / 8
+    7.5
     """
     lft, rgt = check_pair(left, right)
     h, w = lft.shape[:2]

@@ -49,6 +49,18 @@ class Rectification:
     inlier_count : int
         Interest-point matches consistent with the epipolar geometry (uncalibrated; 0
         when calibrated).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import StereoCalibration, rectify_calibrated
+    >>> k = np.array([[100.0, 0.0, 79.5], [0.0, 100.0, 59.5], [0.0, 0.0, 1.0]])
+    >>> calib = StereoCalibration(image_size=(160, 120), k_left=k, dist_left=np.zeros(5),
+    ...     k_right=k, dist_right=np.zeros(5), rotation=np.eye(3),
+    ...     translation_m=np.array([-0.1, 0.0, 0.0]))
+    >>> rect = rectify_calibrated(calib)
+    >>> rect.image_size, rect.map_left.shape, round(rect.baseline_m, 6)
+    ((160, 120), (120, 160, 2), 0.1)
     """
 
     image_size: tuple[int, int]
@@ -88,6 +100,18 @@ def rectify_calibrated(
     -------
     Rectification
         With ``doffs_px = 0`` (principal points aligned, ``CALIB_ZERO_DISPARITY``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import StereoCalibration, rectify_calibrated
+    >>> k = np.array([[100.0, 0.0, 79.5], [0.0, 100.0, 59.5], [0.0, 0.0, 1.0]])
+    >>> calib = StereoCalibration(image_size=(160, 120), k_left=k, dist_left=np.zeros(5),
+    ...     k_right=k, dist_right=np.zeros(5), rotation=np.eye(3),
+    ...     translation_m=np.array([-0.1, 0.0, 0.0]))
+    >>> rect = rectify_calibrated(calib)  # an ideal rig: rectification changes nothing
+    >>> round(rect.focal_px, 6), round(rect.baseline_m, 6), rect.doffs_px
+    (100.0, 0.1, 0.0)
     """
     if not 0.0 <= alpha <= 1.0:
         raise InputError(f"alpha must be in [0, 1], got {alpha}")
@@ -152,6 +176,15 @@ def match_features(
     -------
     pts_left, pts_right : ndarray of float32, shape (M, 2)
         Matched positions [px]; mutual best matches only.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import match_features
+    >>> left = (np.random.default_rng(0).random((120, 160)) * 255).astype(np.uint8)
+    >>> pts_left, pts_right = match_features(left, np.roll(left, -8, axis=1))
+    >>> pts_left.shape[1], float(np.median(pts_left[:, 0] - pts_right[:, 0]))
+    (2, 8.0)
     """
     lft, rgt = check_pair(left, right)
     if not 0.0 < ratio < 1.0:
@@ -236,6 +269,17 @@ def rectify_uncalibrated(
     ------
     InputError
         If too few consistent matches are found (untextured images, different scenes).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import cv2
+    >>> from firefleet.perception.stereo import rectify_uncalibrated
+    >>> noise = (np.random.default_rng(0).random((120, 160)) * 255).astype(np.uint8)
+    >>> left = cv2.GaussianBlur(noise, (3, 3), 0)
+    >>> rect = rectify_uncalibrated(left, np.roll(left, -8, axis=1))
+    >>> rect.h_left.shape, rect.inlier_count >= 16, bool(np.isnan(rect.baseline_m))
+    ((3, 3), True, True)
     """
     lft, rgt = check_pair(left, right)
     if ransac_threshold_px <= 0:
@@ -313,6 +357,20 @@ def rectify_pair(left: ArrayLike, right: ArrayLike, rect: Rectification) -> tupl
     InputError
         If the images are not the size the rectification was made for (a calibration
         file that does not match the images).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.stereo import StereoCalibration, rectify_calibrated, rectify_pair
+    >>> k = np.array([[100.0, 0.0, 79.5], [0.0, 100.0, 59.5], [0.0, 0.0, 1.0]])
+    >>> calib = StereoCalibration(image_size=(160, 120), k_left=k, dist_left=np.zeros(5),
+    ...     k_right=k, dist_right=np.zeros(5), rotation=np.eye(3),
+    ...     translation_m=np.array([-0.1, 0.0, 0.0]))
+    >>> image = (np.random.default_rng(0).random((120, 160)) * 255).astype(np.uint8)
+    >>> rect_left, rect_right = rectify_pair(image, image, rectify_calibrated(calib))
+    >>> inner = (slice(10, -10), slice(10, -10))  # away from the border
+    >>> rect_left.shape, int(np.abs(rect_left[inner].astype(int) - image[inner]).max())
+    ((120, 160), 0)
     """
     lft, rgt = check_pair(left, right)
     size = (lft.shape[1], lft.shape[0])

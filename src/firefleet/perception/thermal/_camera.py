@@ -37,6 +37,16 @@ class CameraModel:
     k1, k2, p1, p2 : float
         Radial and tangential distortion coefficients (OpenCV ``distCoeffs`` order
         k1, k2, p1, p2), on normalised coordinates.
+
+    Examples
+    --------
+    >>> import math
+    >>> from firefleet.perception.thermal import CameraModel
+    >>> camera = CameraModel(width_px=80, height_px=60, hfov_rad=math.radians(90.0))
+    >>> round(camera.fx_px, 6), camera.principal_point  # (80 / 2) / tan(45 deg)
+    (40.0, (39.5, 29.5))
+    >>> round(float(camera.bearing(29.5, 0.0)), 4)  # the left edge pixel's centre, positive left
+    0.7791
     """
 
     width_px: int = 80

@@ -64,6 +64,13 @@ class DetectionParams:
         or above are exempt).
     destripe : bool
         Remove column stripes first.
+
+    Examples
+    --------
+    >>> from firefleet.perception.thermal import DetectionParams
+    >>> params = DetectionParams()
+    >>> params == DetectionParams()
+    True
     """
 
     warm_contrast_k: float = 3.0
@@ -148,6 +155,16 @@ class Detection:
         Horizontal distance [m] and its 1-sigma error, from a size prior or a stereo
         depth; ``None`` if neither applies.
     range_source : {"size", "stereo", None}
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import detect
+    >>> frame = np.full((60, 80), 20.0)
+    >>> frame[25:31, 37:43] = 400.0
+    >>> fire = detect(frame).detections[0]
+    >>> fire.kind, fire.area_px, fire.bbox_rc, round(fire.peak_c, 1)
+    ('fire', 36, (25, 37, 31, 43), 400.0)
     """
 
     kind: Kind
@@ -193,6 +210,14 @@ class FrameDetections:
         The frame's median after filtering [C].
     filtered_c : ndarray, shape (H, W)
         The filtered frame the detections were measured on [C].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import detect
+    >>> result = detect(np.full((60, 80), 20.0))
+    >>> result.detections, result.fire_alarm, round(result.background_c, 3)
+    ((), False, 20.0)
     """
 
     detections: tuple[Detection, ...]
@@ -231,6 +256,14 @@ def range_from_size(
     Returns
     -------
     range_m, sigma_m : ndarray
+
+    Examples
+    --------
+    >>> import math
+    >>> from firefleet.perception.thermal import range_from_size
+    >>> r, sigma = range_from_size(2 * math.atan(0.25), 0.5)  # 0.5 m wide, seen at 1 m
+    >>> round(float(r), 12), float(sigma)
+    (1.0, 0.0)
     """
     a = np.asarray(angular_size_rad, dtype=np.float64)
     if np.any(~np.isfinite(a)) or np.any(a <= 0) or np.any(a >= math.pi):
@@ -371,6 +404,17 @@ def detect(
     ------
     InputError
         Bad frame (shape, dtype, NaN), camera of another size, depth of another shape.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import detect
+    >>> frame = np.full((60, 80), 20.0)
+    >>> frame[25:31, 37:43] = 400.0  # a 6 x 6 px fire on the optical axis
+    >>> result = detect(frame)
+    >>> fire = result.detections[0]
+    >>> len(result.detections), fire.kind, result.fire_alarm, round(fire.bearing_rad, 4)
+    (1, 'fire', True, 0.0)
     """
     p = DetectionParams() if params is None else params
     raw = check_frame(frame_c)
@@ -512,7 +556,16 @@ def _describe(
 
 
 def detections_document(name: str, result: FrameDetections) -> dict[str, Any]:
-    """The ``detections.json`` entry of one frame."""
+    """The ``detections.json`` entry of one frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import detect, detections_document
+    >>> document = detections_document("frame.npy", detect(np.full((60, 80), 20.0)))
+    >>> document
+    {'frame': 'frame.npy', 'fire_alarm': False, 'background_c': 20.0, 'detections': []}
+    """
     return {
         "frame": name,
         "fire_alarm": result.fire_alarm,

@@ -23,6 +23,19 @@ def check_frame(frame: ArrayLike, name: str = "frame") -> FloatArray:
     ------
     InputError
         If ``frame`` is not numeric, not 2-D, smaller than 3 x 3, or holds NaN or inf.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.errors import InputError
+    >>> from firefleet.perception.thermal import check_frame
+    >>> check_frame(np.full((3, 4), 20, dtype=np.uint16)).dtype
+    dtype('float64')
+    >>> try:
+    ...     check_frame(np.zeros(5))
+    ... except InputError as error:
+    ...     print(error)
+    frame: must have shape (H, W), got (5,)
     """
     arr = np.asarray(frame)
     if arr.dtype.kind not in "fiu":
@@ -57,6 +70,19 @@ def read_frame(path: str | Path, *, calibration: LinearCalibration | None = None
     InputError
         Missing, empty or corrupt file, wrong shape or dtype, 8-bit or colour image,
         NaN temperatures, counts without a calibration.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import read_frame
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(folder.name) / "frame.npy"
+    >>> np.save(path, np.full((60, 80), 21.5))
+    >>> frame = read_frame(path)
+    >>> frame.shape, float(frame[0, 0])
+    ((60, 80), 21.5)
+    >>> folder.cleanup()
     """
     p = Path(path)
     suffix = p.suffix.lower()
@@ -127,6 +153,15 @@ def destripe(frame_c: ArrayLike, *, max_step_k: float = 1.0) -> tuple[FloatArray
         Corrected frame [C].
     offsets : ndarray, shape (W,)
         Column offsets removed [K] (zero mean, zero linear trend).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import destripe
+    >>> stripes = np.array([0.3, -0.3, -0.3, 0.3])  # column offsets, no mean, no trend
+    >>> frame, offsets = destripe(np.full((6, 4), 25.0) + stripes)
+    >>> float(np.abs(frame - 25.0).max().round(12)), offsets.round(6).tolist()
+    (0.0, [0.3, -0.3, -0.3, 0.3])
     """
     f = check_frame(frame_c)
     diff = f[:, 1:] - f[:, :-1]
@@ -168,6 +203,15 @@ def denoise(
     -------
     ndarray, shape (H, W)
         The filtered frame [C].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import denoise
+    >>> frame = np.full((5, 5), 20.0)
+    >>> frame[2, 2] = 400.0  # a hot pixel
+    >>> float(denoise(frame, stripes=False)[2, 2])
+    20.0
     """
     f = check_frame(frame_c)
     if flat_field_c is not None:
@@ -191,6 +235,18 @@ def frame_paths(inputs: list[str] | tuple[str, ...]) -> list[Path]:
     ------
     InputError
         A path that does not exist, or a folder without frames.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import frame_paths
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> for name in ("b.npy", "a.npy", "notes.txt"):
+    ...     _ = (pathlib.Path(folder.name) / name).write_bytes(b"")
+    >>> [path.name for path in frame_paths([folder.name])]
+    ['a.npy', 'b.npy']
+    >>> folder.cleanup()
     """
     paths: list[Path] = []
     for item in inputs:

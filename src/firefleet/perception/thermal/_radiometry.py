@@ -31,6 +31,13 @@ class LinearCalibration:
         Temperature at zero counts [C]. TLinear: -273.15 (counts are centikelvin).
     max_count : int
         Largest valid count: 16383 for Raw14, 65535 for TLinear.
+
+    Examples
+    --------
+    >>> from firefleet.perception.thermal import LinearCalibration
+    >>> tlinear = LinearCalibration.parse("tlinear")
+    >>> tlinear.gain_c_per_count, tlinear.offset_c, tlinear.max_count
+    (0.01, -273.15, 65535)
     """
 
     gain_c_per_count: float
@@ -78,6 +85,13 @@ def counts_to_celsius(counts: ArrayLike, calibration: LinearCalibration) -> Floa
     InputError
         If ``counts`` is not an integer array or holds values outside
         ``[0, calibration.max_count]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import LinearCalibration, counts_to_celsius
+    >>> counts_to_celsius(np.array([27315, 37315]), LinearCalibration.tlinear()).round(6).tolist()
+    [0.0, 100.0]
     """
     arr = np.asarray(counts)
     if not np.issubdtype(arr.dtype, np.integer):
@@ -90,7 +104,14 @@ def counts_to_celsius(counts: ArrayLike, calibration: LinearCalibration) -> Floa
 
 
 def celsius_to_counts(temp_c: ArrayLike, calibration: LinearCalibration) -> NDArray[np.uint16]:
-    """Nearest counts of temperatures [C], clipped to ``[0, max_count]`` (the inverse)."""
+    """Nearest counts of temperatures [C], clipped to ``[0, max_count]`` (the inverse).
+
+    Examples
+    --------
+    >>> from firefleet.perception.thermal import LinearCalibration, celsius_to_counts
+    >>> celsius_to_counts([0.0, 36.6, 1000.0], LinearCalibration.tlinear()).tolist()
+    [27315, 30975, 65535]
+    """
     t = np.asarray(temp_c, dtype=np.float64)
     counts = np.rint((t - calibration.offset_c) / calibration.gain_c_per_count)
     return np.clip(counts, 0, calibration.max_count).astype(np.uint16)
@@ -131,6 +152,15 @@ def band_radiance(temp_c: ArrayLike, *, band_um: tuple[float, float] = (8.0, 14.
     ndarray
         Radiance, same shape as ``temp_c``; linear interpolation in a 0.25 K table
         (relative error below 1e-6).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import band_radiance
+    >>> # 8-14 um carries about 37 % of a 20 C black body's sigma T^4 / pi
+    >>> sigma_t4_pi = 5.670374419e-8 * 293.15**4 / np.pi
+    >>> round(float(band_radiance(20.0) / sigma_t4_pi), 2)
+    0.37
     """
     t = np.asarray(temp_c, dtype=np.float64)
     if t.size and (not np.all(np.isfinite(t)) or t.min() < _TABLE_MIN_C or t.max() > _TABLE_MAX_C):
@@ -142,6 +172,14 @@ def band_radiance(temp_c: ArrayLike, *, band_um: tuple[float, float] = (8.0, 14.
 def radiance_to_celsius(
     radiance: ArrayLike, *, band_um: tuple[float, float] = (8.0, 14.0)
 ) -> FloatArray:
-    """Inverse of :func:`band_radiance` (brightness temperature [C]), clipped to its table."""
+    """Inverse of :func:`band_radiance` (brightness temperature [C]), clipped to its table.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal import band_radiance, radiance_to_celsius
+    >>> radiance_to_celsius(band_radiance([-20.0, 36.6, 600.0])).round(3).tolist()
+    [-20.0, 36.6, 600.0]
+    """
     temps, rad = _radiance_table(band_um)
     return np.asarray(np.interp(np.asarray(radiance, dtype=np.float64), rad, temps))
