@@ -110,7 +110,8 @@ def test_same_stem_frames_get_distinct_pictures(tmp_path: Path) -> None:
     out = tmp_path / "o"
     args = ["thermal", str(tmp_path / "x.npy"), str(tmp_path / "x.png"), "--counts", "tlinear"]
     assert main([*args, "--out", str(out)]) == 0
-    assert sorted(p.name for p in out.glob("[!.]*")) == ["detections.json", "x_npy.png", "x_png.png"]
+    written = sorted(p.name for p in out.glob("[!.]*"))
+    assert written == ["detections.json", "x_npy.png", "x_png.png"]
     doc = json.loads((out / "detections.json").read_text())
     assert [(d["frame"], d["figure"], d["fire_alarm"]) for d in doc] == [
         ("x.npy", "x_npy.png", True),
