@@ -58,6 +58,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.control.fuzzy import SugenoSystem, evaluate, read_fis
 from firefleet.control.fuzzy_kernel import FisTables, compile_system
 from firefleet.errors import InputError, as_float_array
@@ -73,7 +74,6 @@ __all__ = [
     "controller_inputs",
 ]
 
-FloatArray = NDArray[np.float64]
 
 MAIN_INPUTS = ("D_rp", "x_err", "alpha")
 MAIN_OUTPUTS = ("v", "omega")

@@ -22,16 +22,15 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError, check_fields
 
 __all__ = ["PidParams", "PidState", "pid_init", "pid_step", "pid_step_one"]
 
 PidGains = tuple[float, float, float, float, float, float, float]
 """kp, ki, kd, derivative_filter_s, setpoint_weight, tracking_time_s, output_limit."""
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

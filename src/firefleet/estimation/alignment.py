@@ -15,13 +15,12 @@ J. Sturm et al., "A benchmark for the evaluation of RGB-D SLAM systems", IROS 20
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array
 
 __all__ = ["absolute_trajectory_error", "align_rigid_2d"]
-
-FloatArray = NDArray[np.float64]
 
 
 def align_rigid_2d(source: ArrayLike, target: ArrayLike) -> tuple[FloatArray, FloatArray]:

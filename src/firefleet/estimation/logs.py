@@ -50,14 +50,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray, IntArray
 from firefleet.errors import InputError
 
 __all__ = ["FORMAT_TAG", "SlamLog", "format_log", "gtsam_text", "read_log"]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 FORMAT_TAG = "FIREFLEET-SLAM-LOG"
 """First word of firefleet's own log files (then the version number)."""

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from firefleet._typing import FloatArray, IntArray
 from firefleet.errors import InputError, as_float_array, check_fields
 from firefleet.models.kinematics import RobotGeometry, wrap_angle
 
@@ -57,8 +58,6 @@ __all__ = [
     "weighted_pose_mean",
 ]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 ProgressCallback = Callable[[int, int], None]
 
 _LOG = logging.getLogger(__name__)

@@ -14,13 +14,12 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 
 __all__ = ["EncoderParams", "EncoderState", "encoder_init", "encoder_step", "encoder_step_one"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

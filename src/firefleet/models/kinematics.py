@@ -15,8 +15,9 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import as_float_array, check_fields
 
 __all__ = [
@@ -30,8 +31,6 @@ __all__ = [
     "wrap_angle",
     "wrap_angle_one",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -15,13 +15,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array, check_fields
 
 __all__ = ["MassDamperParams", "mass_damper_step"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

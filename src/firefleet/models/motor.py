@@ -23,8 +23,9 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 import scipy.linalg
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError, check_fields
 
 __all__ = ["DiscreteMotor", "MotorParams", "discretise_motor", "motor_step", "motor_step_one"]
@@ -33,8 +34,6 @@ MotorCoefficients = tuple[
     float, float, float, float, float, float, float, float, float, float, float, float
 ]
 """The twelve numbers of a :class:`DiscreteMotor` for :func:`motor_step_one`."""
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -19,13 +19,13 @@ from functools import cached_property
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 
 __all__ = ["PolynomialPath", "straight_line"]
 
-FloatArray = NDArray[np.float64]
 
 _PANELS = 256
 """Quadrature panels over the path's x range."""

@@ -27,14 +27,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 from firefleet.planning.paths import PolynomialPath
 
 __all__ = ["Trajectory"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)

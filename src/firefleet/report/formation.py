@@ -15,13 +15,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.scenarios.schema import Formation
 from firefleet.sim.formation import RADIUS_BAND, spacing_error_deg
 from firefleet.sim.result import SimResult
 
 __all__ = ["formation_animation", "formation_figures"]
 
-FloatArray = NDArray[np.float64]
 
 _GIF_FRAMES = 40
 """Frames of the animation (spread evenly over the run)."""

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 from firefleet.report.html import ReportRun
 from firefleet.scenarios.schema import Claim
@@ -38,7 +39,6 @@ from firefleet.sim.metrics import metrics_document
 
 __all__ = ["KNOWN_FRAMES", "stereo_runs", "thermal_run"]
 
-FloatArray = NDArray[np.float64]
 
 KNOWN_FRAMES = {
     "flir_t420_frame0_celsius": "one small warm object near row 128, column 172, not a fire",

@@ -12,16 +12,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.estimation.fastslam import FastSlamResult
 from firefleet.estimation.logs import SlamLog
 from firefleet.report.html import ReportRun
 from firefleet.scenarios.schema import Claim
 
 __all__ = ["slam_animation_gif", "slam_figure_png", "slam_report_runs"]
-
-FloatArray = NDArray[np.float64]
 
 
 def _pyplot() -> Any:

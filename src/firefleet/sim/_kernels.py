@@ -36,6 +36,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray, IntArray
 from firefleet.control.fuzzy_kernel import eval_one
 from firefleet.control.pid import pid_step_one
 from firefleet.models.encoder import encoder_init, encoder_step_one
@@ -54,8 +55,6 @@ __all__ = [
     "run_motor_team",
 ]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 PARALLEL_MIN_ROBOTS = 64
 """Teams at least this large run their robots on every core (they are independent, so

@@ -32,8 +32,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.control.pid import PidParams, PidState, pid_init, pid_step
 from firefleet.errors import InputError, check_fields
 from firefleet.models.encoder import EncoderParams, EncoderState, encoder_init, encoder_step
@@ -50,8 +51,6 @@ __all__ = [
     "encoder_phase",
     "speed_control",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

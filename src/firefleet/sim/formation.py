@@ -52,6 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.formation import contact_pairs, formation_force_and_stiffness
 from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
@@ -80,8 +81,6 @@ __all__ = [
     "substeps",
 ]
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 Progress = Callable[[int, int], None]
 
 RADIUS_BAND = 0.05

@@ -38,6 +38,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.scenarios.schema import Scenario
 from firefleet.sim.drive import (
     DriveStack,
@@ -73,7 +74,6 @@ __all__ = [
     "run_staged",
 ]
 
-FloatArray = NDArray[np.float64]
 Messages = Mapping[str, FloatArray]
 
 ProgressCallback = Callable[[int, int], None]

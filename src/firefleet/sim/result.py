@@ -7,13 +7,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.scenarios.schema import Scenario
 
 __all__ = ["SimResult"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -21,14 +21,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.ndimage as ndi
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array, check_fields
 from firefleet.perception.thermal import CameraModel, band_radiance, radiance_to_celsius
 
 __all__ = ["ThermalCameraParams", "ThermalScene", "render_thermal"]
 
-FloatArray = NDArray[np.float64]
 
 _MAX_WORK = 6_000_000
 """Ray-primitive pairs handled at once (bounds the memory of one batch)."""

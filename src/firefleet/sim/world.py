@@ -42,8 +42,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.control.pid import PidParams
 from firefleet.errors import InputError, check_fields
 from firefleet.estimation.logs import SlamLog, read_log
@@ -78,7 +78,6 @@ __all__ = [
     "simulate_drive",
 ]
 
-FloatArray = NDArray[np.float64]
 ProgressCallback = Callable[[int, int], None]
 
 

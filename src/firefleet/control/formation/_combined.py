@@ -12,10 +12,9 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.formation._forces import (
     BLOCK_ELEMS,
-    BoolArray,
-    FloatArray,
     FormationParams,
     _contact,
     _coulomb_sums,

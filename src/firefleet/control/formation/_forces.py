@@ -13,10 +13,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from firefleet._typing import BoolArray, FloatArray
 from firefleet.errors import InputError, as_float_array, check_fields
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 BLOCK_ELEMS = 1 << 15
 """Default number of robot pairs per block of the pairwise sums (32,768: a block's

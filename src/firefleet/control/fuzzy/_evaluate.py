@@ -22,15 +22,15 @@ import io
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.control.fuzzy._kernel import eval_packed, eval_rows
 from firefleet.control.fuzzy._system import SugenoSystem
 from firefleet.errors import InputError
 
 __all__ = ["evaluate", "evaluate_csv"]
 
-FloatArray = NDArray[np.float64]
 
 _NOT_FINITE = "evaluate: x must be finite, got non-finite values"
 

@@ -25,6 +25,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray, IntArray
 from firefleet.control.fuzzy._membership import MF_CODES, membership_one, mf_value
 from firefleet.errors import InputError
 
@@ -42,9 +43,6 @@ __all__ = [
     "membership_one",
     "pack",
 ]
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 
 class FisTables(NamedTuple):

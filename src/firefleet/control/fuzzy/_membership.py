@@ -17,13 +17,13 @@ from typing import Literal, get_args
 
 import numba
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 
 __all__ = ["MF_CODES", "MfKind", "membership", "membership_one", "mf_value"]
 
-FloatArray = NDArray[np.float64]
 
 MfKind = Literal["trimf", "trapmf", "gaussmf", "gbellmf", "sigmf", "smf", "zmf"]
 """Input membership function shapes (MATLAB names)."""

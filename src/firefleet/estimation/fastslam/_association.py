@@ -10,8 +10,8 @@ should have seen and did not (Montemerlo 2003, sec. 5.1.3).
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.estimation.fastslam._kernel import update_landmarks
 from firefleet.estimation.fastslam._params import FastSlamParams, SensorView
 from firefleet.estimation.fastslam._state import FastSlamState, grow, particle_deltas
@@ -28,9 +28,6 @@ from firefleet.models.kinematics import wrap_angle
 
 __all__ = ["step_unknown"]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 

@@ -28,13 +28,9 @@ import math
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.models.kinematics import wrap_angle_one
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 
 _LOG_2PI = math.log(2.0 * math.pi)
 

@@ -7,8 +7,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray, IntArray
 from firefleet.errors import InputError
 from firefleet.estimation.fastslam._params import FastSlamParams, SensorView
 from firefleet.estimation.fastslam._state import fastslam_init
@@ -18,8 +18,6 @@ from firefleet.estimation.particle_filter import ProgressCallback, weighted_pose
 
 __all__ = ["FastSlamResult", "fastslam_memory_bytes", "run_fastslam"]
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 _LOG = logging.getLogger("firefleet.estimation.fastslam")
 

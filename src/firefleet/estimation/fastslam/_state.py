@@ -6,16 +6,12 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.errors import InputError, as_float_array
 from firefleet.estimation.particle_filter import normalise_log_weights
 
 __all__ = ["FastSlamState", "fastslam_init", "grow", "particle_deltas"]
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 
 
 @dataclass

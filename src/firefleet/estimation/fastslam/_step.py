@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray, IntArray
 from firefleet.estimation.fastslam._association import step_unknown
 from firefleet.estimation.fastslam._kernel import update_known_v1, update_known_v2
 from firefleet.estimation.fastslam._params import FastSlamParams, SensorView
@@ -16,9 +16,6 @@ from firefleet.estimation.particle_filter import (
 )
 
 __all__ = ["fastslam_step"]
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 
 def fastslam_step(

@@ -6,8 +6,8 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray, IntArray
 from firefleet.estimation.fastslam._run import FastSlamResult
 from firefleet.estimation.logs import SlamLog
 
@@ -23,9 +23,6 @@ __all__ = [
     "slam_summary",
     "trajectory_csv",
 ]
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 
 MATCH_RADIUS_M = 1.0

@@ -14,10 +14,9 @@ import numpy as np
 import yaml
 from numpy.typing import ArrayLike
 
+from firefleet._typing import Float32Array, FloatArray
 from firefleet.errors import InputError, as_float_array
 from firefleet.perception.stereo._images import (
-    Float32Array,
-    FloatArray,
     _check_image,
     _grey,
     check_pair,

@@ -9,9 +9,9 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from firefleet._typing import Float32Array
 from firefleet.errors import InputError
 from firefleet.perception.stereo._images import (
-    Float32Array,
     Image,
     _check_image,
     _grey,

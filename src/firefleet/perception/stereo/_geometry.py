@@ -9,8 +9,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from firefleet._typing import Float32Array, FloatArray
 from firefleet.errors import InputError, as_float_array
-from firefleet.perception.stereo._images import Float32Array, FloatArray, Image
+from firefleet.perception.stereo._images import (
+    Image,
+)
 
 
 def depth_from_disparity(

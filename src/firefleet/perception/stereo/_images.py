@@ -11,8 +11,6 @@ from numpy.typing import ArrayLike, NDArray
 from firefleet.errors import InputError
 from firefleet.perception._opencv import quiet_opencv
 
-FloatArray = NDArray[np.float64]
-Float32Array = NDArray[np.float32]
 Image = NDArray[np.uint8]
 
 

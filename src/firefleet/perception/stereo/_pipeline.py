@@ -11,6 +11,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike
 
+from firefleet._typing import Float32Array, FloatArray
 from firefleet.errors import InputError
 from firefleet.perception.stereo._calibration import StereoCalibration
 from firefleet.perception.stereo._disparity import DisparityResult, compute_disparity
@@ -20,7 +21,10 @@ from firefleet.perception.stereo._geometry import (
     point_cloud,
     range_scan,
 )
-from firefleet.perception.stereo._images import Float32Array, FloatArray, Image, check_pair
+from firefleet.perception.stereo._images import (
+    Image,
+    check_pair,
+)
 from firefleet.perception.stereo._rectify import (
     Rectification,
     rectify_calibrated,

@@ -11,12 +11,11 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike
 
+from firefleet._typing import Float32Array, FloatArray
 from firefleet.errors import InputError
 from firefleet.perception.stereo._calibration import StereoCalibration
 from firefleet.perception.stereo._disparity import _check_num_disparities
 from firefleet.perception.stereo._images import (
-    Float32Array,
-    FloatArray,
     Image,
     _grey,
     check_pair,

@@ -6,11 +6,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError, check_fields
-
-FloatArray = NDArray[np.float64]
 
 LEPTON_HFOV_RAD = math.radians(51.0)
 """Lepton 2.5 / 3.5 horizontal field of view (deliverable 2.7.1.2)."""

@@ -10,8 +10,11 @@ import numpy as np
 import scipy.ndimage as ndi
 from numpy.typing import ArrayLike, NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError, check_fields
-from firefleet.perception.thermal._camera import CameraModel, FloatArray
+from firefleet.perception.thermal._camera import (
+    CameraModel,
+)
 from firefleet.perception.thermal._frames import check_frame, denoise, destripe
 from firefleet.perception.thermal._radiometry import band_radiance
 

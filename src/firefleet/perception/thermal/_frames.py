@@ -8,8 +8,8 @@ import numpy as np
 import scipy.ndimage as ndi
 from numpy.typing import ArrayLike, NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError
-from firefleet.perception.thermal._camera import FloatArray
 from firefleet.perception.thermal._radiometry import LinearCalibration, counts_to_celsius
 
 FRAME_SUFFIXES = (".npy", ".png", ".pgm", ".pnm", ".tif", ".tiff")

@@ -9,8 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError, check_fields
-from firefleet.perception.thermal._camera import FloatArray
 
 KELVIN = 273.15
 _H_PLANCK = 6.62607015e-34  # J s (SI 2019, exact)

@@ -16,6 +16,7 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 from firefleet.scenarios.schema import Scenario, VoltageStep, WheelSpeedStep
 from firefleet.sim._kernels import run_motor_team
@@ -27,7 +28,6 @@ from firefleet.sim.result import SimResult
 
 __all__ = ["KINDS", "StepParams", "voltage_step_metrics", "wheel_speed_step_metrics"]
 
-FloatArray = NDArray[np.float64]
 
 _C = TypeVar("_C", VoltageStep, WheelSpeedStep)
 

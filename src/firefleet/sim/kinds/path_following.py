@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from firefleet._typing import FloatArray
 from firefleet.control.path_following import (
     PathFollowingController,
     arrival,
@@ -56,7 +57,6 @@ __all__ = [
     "path_following_metrics",
 ]
 
-FloatArray = NDArray[np.float64]
 
 CONTROL_SERIES = (
     "v_ref_m_s",
