@@ -391,3 +391,11 @@ def test_range_scan_of_a_wall_and_a_post() -> None:
     none = st.range_scan(wall, n_sectors=9, fov_rad=fov, height_band_m=(0.1, 0.5))
     assert np.all(np.isinf(none.range_m))
     assert none.count.sum() == 0
+
+
+def test_uncalibrated_rectification_of_a_degenerate_pair_is_an_input_error() -> None:
+    # noise and its own 8 px shift: every match lies on one horizontal displacement, a
+    # degenerate set on which OpenCV's fundamental-matrix fit asserts (was a cv2.error)
+    noise = np.random.default_rng(0).integers(0, 256, (120, 160), dtype=np.uint8)
+    with pytest.raises(InputError, match="uncalibrated rectification"):
+        st.rectify_uncalibrated(noise, np.roll(noise, 8, axis=1))

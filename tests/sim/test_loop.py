@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from firefleet import builtin_names, load_scenario
+from firefleet.errors import InputError
 from firefleet.models.encoder import EncoderParams
 from firefleet.scenarios import parse_scenario
 from firefleet.scenarios.schema import PathFollowing, Scenario
@@ -205,3 +206,13 @@ def test_backend_array_runs_the_staged_loop(monkeypatch: pytest.MonkeyPatch) -> 
     staged = simulate(scn, backend="array").arrays()
     assert calls == [1]
     _assert_close(fused, staged)
+
+
+def test_run_loop_refuses_recording_steps_that_miss_the_end() -> None:
+    scenario = load_scenario("motor-pid")
+    decider = task_kind(scenario.command.kind).decider
+    assert decider is not None
+    with pytest.raises(InputError, match="end at the last step 1000"):
+        run_loop(scenario, decider, np.array([0, 100, 200]))
+    with pytest.raises(InputError, match="rise strictly"):
+        run_loop(scenario, decider, np.array([0, 200, 100, 1000]))

@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from firefleet._typing import FloatArray
+from firefleet.errors import InputError
 from firefleet.scenarios.schema import Scenario
 from firefleet.sim.drive import (
     DriveStack,
@@ -396,6 +397,14 @@ def run_loop(
     rng = np.random.default_rng(scenario.seed)
     n = scenario.n_robots
     n_steps = scenario.n_steps
+    steps = np.asarray(rec_steps)
+    if steps.ndim != 1 or steps.size == 0 or steps[-1] != n_steps or np.any(np.diff(steps) <= 0):
+        raise InputError(
+            f"rec_steps must rise strictly and end at the last step {n_steps}, "
+            f"got {steps.size} steps ending at {steps[-1] if steps.size else None}"
+        )
+    if steps[0] < 0:
+        raise InputError(f"rec_steps must be >= 0, got {steps[0]}")
     phase = encoder_phase(scenario.encoder, n, rng)
     if fused is not None and stages is None:
         return fused(scenario, phase, rec_steps, progress)

@@ -290,8 +290,13 @@ def rectify_uncalibrated(
             f"uncalibrated rectification: only {len(pts_l)} interest-point matches "
             f"(need >= {max(min_inliers, 8)}); are the images of the same scene and textured?"
         )
-    F, mask = cv2.findFundamentalMat(pts_l, pts_r, cv2.FM_RANSAC, ransac_threshold_px, 0.999, 5000)
-    if F is None or F.shape != (3, 3):
+    try:
+        F, mask = cv2.findFundamentalMat(
+            pts_l, pts_r, cv2.FM_RANSAC, ransac_threshold_px, 0.999, 5000
+        )
+    except cv2.error:  # OpenCV asserts on degenerate point sets (all on one line, ...)
+        F, mask = None, None
+    if F is None or mask is None or F.shape != (3, 3):
         raise InputError("uncalibrated rectification: no fundamental matrix fits the matches")
     inl = mask.ravel().astype(bool)
     if inl.sum() < min_inliers:
@@ -300,7 +305,10 @@ def rectify_uncalibrated(
             f"epipolar geometry (need >= {min_inliers})"
         )
     pl, pr = pts_l[inl], pts_r[inl]
-    ok, h1_raw, h2_raw = cv2.stereoRectifyUncalibrated(pl, pr, F, (w, hgt))
+    try:
+        ok, h1_raw, h2_raw = cv2.stereoRectifyUncalibrated(pl, pr, F, (w, hgt))
+    except cv2.error:  # an assertion inside OpenCV on degenerate input: no rectification
+        ok = False
     if not ok:
         raise InputError("uncalibrated rectification failed (degenerate geometry)")
     H1: FloatArray = np.asarray(h1_raw, dtype=np.float64)
