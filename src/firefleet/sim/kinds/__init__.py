@@ -6,7 +6,7 @@ Each module lists its kinds in a module-level ``KINDS`` tuple of
 To add a kind (say ``navigate``):
 
 1. its command, a frozen pydantic dataclass with ``kind: Literal["navigate"]``, joins
-   the ``Command`` union of :mod:`firefleet.scenarios.schema` (for now the one line
+   the ``Command`` union in ``scenarios/_commands.py`` (for now the one line
    outside the kind's module);
 2. ``kinds/navigate.py`` holds the decision, ``new_state, command = decide(state,
    inputs, params, dt_s)`` on the world loop (:class:`firefleet.sim.loop.Decider`; it
