@@ -1,9 +1,36 @@
-"""The world the robots move in: building maps (ROS ``map_server`` format).
+"""The world the robots move in: building maps (ROS ``map_server`` format), and the
+fire, heat and smoke on them.
 
 The grid convention (row 0 at the map's top, ``origin`` at the lower-left corner) lives
 in :class:`OccupancyGrid` alone.
 """
 
+from firefleet.world._fields import HEAT, SMOKE, FieldParams, diffuse_step, stable_substeps
+from firefleet.world._fire import (
+    BURNING,
+    BURNT,
+    UNBURNT,
+    FireParams,
+    FireState,
+    corridor_front_speed,
+    fire_init,
+    fire_step,
+)
 from firefleet.world._grid import OccupancyGrid
 
-__all__ = ["OccupancyGrid"]
+__all__ = [
+    "BURNING",
+    "BURNT",
+    "HEAT",
+    "SMOKE",
+    "UNBURNT",
+    "FieldParams",
+    "FireParams",
+    "FireState",
+    "OccupancyGrid",
+    "corridor_front_speed",
+    "diffuse_step",
+    "fire_init",
+    "fire_step",
+    "stable_substeps",
+]
