@@ -1,5 +1,5 @@
 """The world the robots move in: building maps (ROS ``map_server`` format), and the
-fire, heat and smoke on them.
+fire, heat and smoke on them, and the people in them.
 
 The grid convention (row 0 at the map's top, ``origin`` at the lower-left corner) lives
 in :class:`OccupancyGrid` alone.
@@ -17,8 +17,16 @@ from firefleet.world._fire import (
     fire_step,
 )
 from firefleet.world._grid import OccupancyGrid
+from firefleet.world._victims import (
+    BODY_C,
+    VictimParams,
+    VictimState,
+    victim_dose_rate,
+    victim_step,
+)
 
 __all__ = [
+    "BODY_C",
     "BURNING",
     "BURNT",
     "HEAT",
@@ -28,9 +36,13 @@ __all__ = [
     "FireParams",
     "FireState",
     "OccupancyGrid",
+    "VictimParams",
+    "VictimState",
     "corridor_front_speed",
     "diffuse_step",
     "fire_init",
     "fire_step",
     "stable_substeps",
+    "victim_dose_rate",
+    "victim_step",
 ]
