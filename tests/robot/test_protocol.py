@@ -103,11 +103,11 @@ def test_every_message_round_trips(message: object) -> None:
 
 
 def test_values_that_do_not_fit_the_wire_are_refused() -> None:
-    with pytest.raises(InputError, match="setpoint right_rad_s 40.0 does not fit"):
+    with pytest.raises(InputError, match=r"setpoint right_rad_s 40\.0 does not fit"):
         pack(Setpoint(40.0, 0.0))
     with pytest.raises(InputError, match="finite"):
         pack(Setpoint(float("nan"), 0.0))
-    with pytest.raises(InputError, match="pwm left 1.5"):
+    with pytest.raises(InputError, match=r"pwm left 1\.5"):
         pack(Pwm(0.0, 1.5))
     with pytest.raises(InputError, match="exceeds 32"):
         encode_frame(0x01, bytes(33))

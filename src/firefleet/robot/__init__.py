@@ -1,14 +1,17 @@
-"""On the robot: the serial link to the Arduino motor controller and its fake.
+"""On the robot: the serial link to the Arduino motor controller, and a fake board on a
+pseudo-terminal that runs the sketch's logic on simulated motors.
 
 The bytes on the wire are described once, in ``firmware/arduino/PROTOCOL.md``.
 """
 
+from firefleet.robot._arduino import ArduinoLink
+from firefleet.robot._fake_board import BoardLog, FakeBoard
 from firefleet.robot._frames import MAX_PAYLOAD, SYNC, Frame, FrameDecoder, crc16, encode_frame
 from firefleet.robot._messages import (
     LENGTHS,
+    Encoders,
     EStop,
     EStopClear,
-    Encoders,
     Message,
     Pwm,
     Setpoint,
@@ -21,9 +24,12 @@ __all__ = [
     "LENGTHS",
     "MAX_PAYLOAD",
     "SYNC",
+    "ArduinoLink",
+    "BoardLog",
     "EStop",
     "EStopClear",
     "Encoders",
+    "FakeBoard",
     "Frame",
     "FrameDecoder",
     "Message",

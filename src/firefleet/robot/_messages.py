@@ -138,7 +138,9 @@ def pack(message: Message) -> bytes:
     supply_mv = round(message.supply_v * 1000.0)
     if not 0 <= supply_mv <= 0xFFFF:
         raise InputError(f"status supply_v {message.supply_v} out of 0..65.535 V")
-    payload = struct.pack("<BBHH", message.flags & 0xFF, 0, supply_mv, message.receive_errors & 0xFFFF)
+    payload = struct.pack(
+        "<BBHH", message.flags & 0xFF, 0, supply_mv, message.receive_errors & 0xFFFF
+    )
     return encode_frame(STATUS, payload)
 
 
