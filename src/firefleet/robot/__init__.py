@@ -19,6 +19,13 @@ from firefleet.robot._messages import (
     pack,
     unpack,
 )
+from firefleet.robot._pt100 import (
+    FakeMax31865,
+    Pt100,
+    Pt100Reading,
+    cvd_resistance_ohm,
+    cvd_temperature_c,
+)
 
 __all__ = [
     "LENGTHS",
@@ -30,13 +37,18 @@ __all__ = [
     "EStopClear",
     "Encoders",
     "FakeBoard",
+    "FakeMax31865",
     "Frame",
     "FrameDecoder",
     "Message",
+    "Pt100",
+    "Pt100Reading",
     "Pwm",
     "Setpoint",
     "Status",
     "crc16",
+    "cvd_resistance_ohm",
+    "cvd_temperature_c",
     "encode_frame",
     "pack",
     "unpack",
