@@ -7,6 +7,7 @@ The bytes on the wire are described once, in ``firmware/arduino/PROTOCOL.md``.
 from firefleet.robot._arduino import ArduinoLink
 from firefleet.robot._fake_board import BoardLog, FakeBoard
 from firefleet.robot._frames import MAX_PAYLOAD, SYNC, Frame, FrameDecoder, crc16, encode_frame
+from firefleet.robot._lepton import FakeLepton, Lepton, LinuxI2c
 from firefleet.robot._messages import (
     LENGTHS,
     Encoders,
@@ -37,9 +38,12 @@ __all__ = [
     "EStopClear",
     "Encoders",
     "FakeBoard",
+    "FakeLepton",
     "FakeMax31865",
     "Frame",
     "FrameDecoder",
+    "Lepton",
+    "LinuxI2c",
     "Message",
     "Pt100",
     "Pt100Reading",
