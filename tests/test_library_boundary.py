@@ -1,4 +1,4 @@
-"""models, control, planning, perception and estimation are libraries: they import
+"""models, control, planning, perception, estimation and world are libraries: they import
 neither the report nor the command line, write no file a command line decides on, and
 keep each module small (a package of private modules past about 600 lines)."""
 
@@ -18,6 +18,7 @@ LIBRARIES = (
     "firefleet.planning",
     "firefleet.perception",
     "firefleet.estimation",
+    "firefleet.world",
 )
 FORBIDDEN = ("firefleet.report", "firefleet.cli", "firefleet.outputs", "matplotlib")
 # Path.write_text / write_bytes, np.save, json.dump, mkdir: the command line's job
