@@ -69,7 +69,7 @@ class Point:
     scenario : Scenario
         The base scenario with this point's values.
     digest : str
-        A hash of the point's whole scenario (its plain data): a finished run is reused
+        A hash of the point's whole validated scenario: a finished run is reused
         on resume only when its point's digest and seed match.
     """
 
@@ -306,7 +306,7 @@ def points_of(
                 values={a.key: a.values[k] for a, k in zip(axes, combo, strict=True)},
                 labels={a.key: a.labels[k] for a, k in zip(axes, combo, strict=True)},
                 scenario=scenario,
-                digest=_digest(point_data),
+                digest=_digest(scenario_data(scenario)),  # 1 and 1.0 alike
             )
         )
     return tuple(points)
