@@ -34,7 +34,8 @@ def test_a_sweep_writes_the_table_summary_and_plots_equal_to_firefleet_run(
     ]
     table = pq.read_table(out / "results.parquet")
     csv_lines = (out / "results.csv").read_text().splitlines()
-    assert len(csv_lines) == 1 + 6 and csv_lines[0].startswith('"point","speed_pid.kp","seed"')
+    assert len(csv_lines) == 1 + 6
+    assert csv_lines[0].startswith('"point","speed_pid.kp","seed"')
     # every run equals `firefleet run` of the point's scenario with that seed
     base = load_scenario("motor-pid")
     for row in table.to_pylist():
@@ -42,7 +43,9 @@ def test_a_sweep_writes_the_table_summary_and_plots_equal_to_firefleet_run(
         path = tmp_path / f"p{row['point']}.yaml"
         path.write_text(yaml.safe_dump(scenario_data(point.scenario)))
         single = tmp_path / f"run{row['point']}-{row['seed']}"
-        status = main(["run", str(path), "--seed", str(row["seed"]), "--no-plots", "--out", str(single)])
+        status = main(
+            ["run", str(path), "--seed", str(row["seed"]), "--no-plots", "--out", str(single)]
+        )
         doc = json.loads((single / "metrics.json").read_text())
         for claim in doc["claims"]:
             assert row[f"claim:{claim['name']}"] is claim["passed"]
@@ -50,7 +53,9 @@ def test_a_sweep_writes_the_table_summary_and_plots_equal_to_firefleet_run(
         for name in base.metric_names:
             assert row[name] == doc[name], (name, row["seed"])
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["runs"] == 6 and summary["failed"] == 0 and summary["complete"]
+    assert summary["runs"] == 6
+    assert summary["failed"] == 0
+    assert summary["complete"]
     kp4 = summary["points"][1]
     settling = [r["settling_time_s"] for r in table.to_pylist() if r["speed_pid.kp"] == 4.0]
     assert kp4["values"] == {"speed_pid.kp": "4"}
@@ -107,7 +112,8 @@ def test_bad_input_is_one_line_and_exit_2(
     out = tmp_path / "o"
     assert main(["sweep", "motor-pid", *extra, "--out", str(out)]) == 2
     line = _one_error_line(capsys)
-    assert line.startswith("firefleet: error: ") and expected in line
+    assert line.startswith("firefleet: error: ")
+    assert expected in line
     assert not out.exists()
 
 

@@ -107,14 +107,15 @@ def test_a_separate_scheduler_and_worker_give_the_same_table(client: Any) -> Non
     worker = [dask, "worker", address, "--nworkers", "1", "--nthreads", "1"]
     with _started([*scheduler, "--dashboard-address", ":0"], env) as sched:
         with _started([*worker, "--dashboard-address", ":0"], env) as work:
-            with Client(address, timeout=30) as remote:
+            with Client(address, timeout=30) as remote:  # type: ignore[no-untyped-call]
                 remote.wait_for_workers(1, timeout=60)
                 far = firefleet.sweep("motor-pid", GRID, SEEDS, client=remote)
             assert work.poll() is None
         assert sched.poll() is None
     near = firefleet.sweep("motor-pid", GRID, SEEDS, client=client)
     assert _without_times(far).equals(_without_times(near))
-    assert sched.returncode is not None and work.returncode is not None
+    assert sched.returncode is not None
+    assert work.returncode is not None
 
 
 def test_resume_runs_only_what_is_missing(client: Any) -> None:
@@ -139,7 +140,8 @@ def test_a_failing_run_is_recorded_and_the_others_finish(client: Any) -> None:
     points = points_of(scenario, [parse_set("command.controller_fis=no-such.fis,''")])
     table, _ = run_points(client, points, (0, 1), scenario.name)
     errors = table.column("error").to_pylist()
-    assert errors[:2] == [errors[0]] * 2 and "no-such.fis: no such file" in errors[0]
+    assert errors[:2] == [errors[0]] * 2
+    assert "no-such.fis: no such file" in errors[0]
     assert errors[2:] == [None, None]
     claims = [name for name in table.column_names if name.startswith("claim:")]
     assert all(table.column(name).to_pylist()[:2] == [None, None] for name in claims)
@@ -164,4 +166,5 @@ def test_ctrl_c_cancels_and_keeps_what_finished(client: Any) -> None:
     while client.processing() and any(client.processing().values()):
         assert time.monotonic() < deadline, "tasks left running after Ctrl-C"
         time.sleep(0.05)
-    assert calls[0] == 0 and calls[-1] == len(finished)
+    assert calls[0] == 0
+    assert calls[-1] == len(finished)

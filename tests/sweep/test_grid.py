@@ -9,7 +9,8 @@ import yaml
 
 from firefleet import load_scenario
 from firefleet.errors import InputError
-from firefleet.sweep import parse_seeds, parse_set, points_of
+from firefleet.scenarios import WheelSpeedStep
+from firefleet.sweep import Point, parse_seeds, parse_set, points_of
 
 
 def test_seeds_are_a_half_open_range_a_number_or_a_list() -> None:
@@ -36,21 +37,28 @@ def test_values_split_at_top_level_commas_only() -> None:
     assert parse_set("command.speed_rad_s=1e1,2").values == (10.0, 2)
 
 
+def _speed(point: Point) -> float:
+    command = point.scenario.command
+    assert isinstance(command, WheelSpeedStep)
+    return command.speed_rad_s
+
+
 def test_the_grid_is_the_product_and_zip_pairs() -> None:
     base = load_scenario("motor-pid")
     axes = [parse_set("command.speed_rad_s=1,2,3"), parse_set("speed_pid.kp=1,2,3")]
     grid = points_of(base, axes)
-    assert [(p.scenario.command.speed_rad_s, p.scenario.speed_pid.kp) for p in grid] == [
+    assert [(_speed(p), p.scenario.speed_pid.kp) for p in grid] == [
         (a, b) for a in (1.0, 2.0, 3.0) for b in (1.0, 2.0, 3.0)
     ]
     zipped = points_of(base, axes, zipped=True)
-    assert [(p.scenario.command.speed_rad_s, p.scenario.speed_pid.kp) for p in zipped] == [
+    assert [(_speed(p), p.scenario.speed_pid.kp) for p in zipped] == [
         (1.0, 1.0),
         (2.0, 2.0),
         (3.0, 3.0),
     ]
     # everything not swept is the base scenario's
-    assert grid[0].scenario.motor == base.motor and grid[0].scenario.claims == base.claims
+    assert grid[0].scenario.motor == base.motor
+    assert grid[0].scenario.claims == base.claims
     assert len({p.digest for p in grid}) == 9
 
 
@@ -86,8 +94,9 @@ def test_a_value_read_from_a_file(tmp_path: Path) -> None:
     axis = parse_set("poses=@team2.yaml", base=tmp_path)
     assert axis.labels == ("@team2.yaml",)
     (point,) = points_of(load_scenario("motor-pid"), [axis])
-    assert point.scenario.n_robots == 2 and point.scenario.poses[1] == (1.0, 0.0, 90.0)
-    with pytest.raises(InputError, match="@missing.yaml: no such file"):
+    assert point.scenario.n_robots == 2
+    assert point.scenario.poses[1] == (1.0, 0.0, 90.0)
+    with pytest.raises(InputError, match=r"@missing\.yaml: no such file"):
         parse_set("poses=@missing.yaml", base=tmp_path)
 
 

@@ -24,7 +24,7 @@ EXIT_RUNS_FAILED = 10
 100 or more); 0 when every run finished (whatever its claims), 130 on Ctrl-C."""
 
 EXIT_INTERRUPTED = 130
-CONNECT_TIMEOUT_S = 5.0
+CONNECT_TIMEOUT_S = 3.0
 
 
 def add_parsers(sub: Any) -> None:

@@ -89,8 +89,12 @@ def execute(
     start = time.monotonic()
     queue = as_completed()  # type: ignore[no-untyped-call]
 
+    known = [0, -math.inf]  # worker threads, when last asked (asking is a round trip)
+
     def threads() -> int:
-        return max(1, int(sum(client.nthreads().values())))
+        if time.monotonic() - known[1] > 1.0:
+            known[:] = [max(1, int(sum(client.nthreads().values()))), time.monotonic()]
+        return int(known[0])
 
     def submit_more() -> None:
         limit = per_thread * threads()
