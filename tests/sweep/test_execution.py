@@ -24,6 +24,7 @@ from firefleet import load_scenario
 from firefleet.sim.metrics import compute_metrics
 from firefleet.sweep import (
     SweepInterrupted,
+    claim_key,
     flat_metrics,
     local_client,
     parse_set,
@@ -65,7 +66,7 @@ def test_a_local_sweep_equals_the_runs_made_one_by_one(client: Any) -> None:
         for name, value in expected.items():  # bit for bit: the same run, elsewhere
             assert row[name] == value or (math.isnan(value) and math.isnan(row[name])), name
         for claim in base.claims:
-            assert row[f"claim:{claim.label}"] == claim.holds(alone.get(claim.metric))
+            assert row[f"claim:{claim_key(claim)}"] == claim.holds(alone.get(claim.metric))
             seen_claims += 1
     assert seen_claims == 6 * len(base.claims)
     # seeds matter (the encoder's phase): the runs of one point are not copies

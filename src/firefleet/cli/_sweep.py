@@ -298,3 +298,64 @@ def cmd_sweep(args: argparse.Namespace, out: Console, err: Console) -> int:
         )
         return EXIT_RUNS_FAILED + min(failed, 100)
     return EXIT_OK
+
+
+def seed_pass_rates(
+    entries: list[Any],
+    scenarios: list[Any],
+    seeds: tuple[int, ...],
+    typed: str,
+    stage: Path,
+    out: Console,
+    err: Console,
+) -> list[Any]:
+    """``firefleet reproduce --seeds``: every scenario over ``seeds`` on a LocalCluster.
+
+    Writes each scenario's runs as ``NAME/seeds.csv`` in ``stage`` and returns the report
+    entries with each claim's pass rate (a run that raised counts as not holding).
+    """
+    import dataclasses
+
+    from firefleet.sweep import build_table, claim_key, csv_bytes, execute, points_of
+
+    points = [
+        dataclasses.replace(points_of(scn, [])[0], index=k) for k, scn in enumerate(scenarios)
+    ]
+    todo = [(p.index, s) for p in points for s in seeds]
+    label = f"{len(scenarios)} experiments x {len(seeds)} seeds"
+    with connect(None, None) as client, sweep_progress(err, label) as progress:
+        rows = execute(client, points, todo, progress=progress)
+    by_name: dict[str, tuple[Any, list[Any]]] = {}
+    for point in points:
+        mine = [r for r in rows if r["point"] == point.index]
+        by_name[point.scenario.name] = (point, mine)
+    updated = []
+    for entry in entries:
+        if entry.name not in by_name:
+            updated.append(entry)
+            continue
+        point, mine = by_name[entry.name]
+        table = build_table([point], mine, entry.name)
+        (stage / entry.folder / "seeds.csv").write_bytes(csv_bytes(table))
+        rates = {
+            claim_key(claim): (
+                sum(r.get(f"claim:{claim_key(claim)}") is True for r in mine),
+                len(mine),
+            )
+            for claim in point.scenario.claims
+        }
+        always = sum(passed == runs for passed, runs in rates.values())
+        failed = sum(r["error"] is not None for r in mine)
+        note = f", {failed} run(s) failed" if failed else ""
+        out.print(
+            f"{entry.name:<24} seeds {typed}: {always} of {len(rates)} claims hold on every "
+            f"seed{note}",
+            markup=False,
+            highlight=False,
+        )
+        updated.append(
+            dataclasses.replace(
+                entry, pass_rates=rates, seeds=typed, links=(*entry.links, "seeds.csv")
+            )
+        )
+    return updated

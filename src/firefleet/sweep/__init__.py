@@ -34,7 +34,7 @@ from firefleet.sweep._table import (
     read_parquet,
     rows_of,
 )
-from firefleet.sweep._tasks import Row, flat_metrics, run_batch, run_one
+from firefleet.sweep._tasks import Row, claim_key, flat_metrics, run_batch, run_one
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -46,6 +46,7 @@ __all__ = [
     "SweepInterrupted",
     "SweepProgress",
     "build_table",
+    "claim_key",
     "column_roles",
     "csv_bytes",
     "execute",

@@ -10,6 +10,7 @@ import numpy as np
 
 from firefleet.sweep._grid import Point
 from firefleet.sweep._table import column_roles
+from firefleet.sweep._tasks import claim_key
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -38,7 +39,8 @@ def summarize(table: pa.Table, points: Sequence[Point]) -> dict[str, Any]:
     """The sweep's summary: one entry per point, in point order.
 
     Each entry: ``point``, ``values`` (the swept keys as typed), ``runs``, ``failed``,
-    ``claims`` (label -> ``passed``, ``of`` (finished runs), ``pass_rate``, ``expected``)
+    ``claims`` (:func:`~firefleet.sweep.claim_key` -> ``passed``, ``of`` (finished
+    runs), ``pass_rate``, ``expected``)
     and ``metrics`` (name -> ``mean``, ``p5``, ``p95``, ``min``, ``max`` over the finite
     values, ``n`` of them and ``not_finite``, such as a settling time never reached).
 
@@ -49,7 +51,7 @@ def summarize(table: pa.Table, points: Sequence[Point]) -> dict[str, Any]:
     >>> points = points_of(load_scenario("motor-pid"), [])
     >>> table = build_table(points, run_batch(points[0].scenario, 0, [0, 1]), "motor-pid")
     >>> entry = summarize(table, points)["points"][0]
-    >>> entry["runs"], entry["claims"]["rise_time_s"]["pass_rate"]
+    >>> entry["runs"], entry["claims"]["rise_time_s < 0.2"]["pass_rate"]
     (2, 1.0)
     """
     roles = column_roles(table)
@@ -60,9 +62,9 @@ def summarize(table: pa.Table, points: Sequence[Point]) -> dict[str, Any]:
         ok = [i for i in mine if data["error"][i] is None]
         claims = {}
         for claim in point.scenario.claims:
-            column = data.get(f"claim:{claim.label}", [])
+            column = data.get(f"claim:{claim_key(claim)}", [])
             passed = sum(bool(column[i]) for i in ok)
-            claims[claim.label] = {
+            claims[claim_key(claim)] = {
                 "expected": claim.expected,
                 "passed": passed,
                 "of": len(ok),

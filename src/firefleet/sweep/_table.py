@@ -2,10 +2,11 @@
 
 Columns, in order: ``point``, one per swept key (a number where every value is one,
 else the value as typed), ``seed``, every scalar metric (a per-robot metric as
-``name[robot k]``), ``claim:LABEL`` (pass/fail; null for a failed run), ``run_time_s``,
-``error`` (null for a run that finished) and ``point_digest`` (a hash of the point's
-scenario: what resume matches). Rows are sorted by point, then seed. The schema's
-metadata names which columns are parameters, metrics and claims.
+``name[robot k]``), ``claim:KEY`` (pass/fail, :func:`firefleet.sweep.claim_key`; null
+for a failed run), ``run_time_s``, ``error`` (null for a run that finished) and
+``point_digest`` (a hash of the point's scenario: what resume matches). Rows are sorted
+by point, then seed. The schema's metadata names which columns are parameters, metrics
+and claims.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from firefleet.sweep._grid import Point
-from firefleet.sweep._tasks import Row
+from firefleet.sweep._tasks import Row, claim_key
 
 if TYPE_CHECKING:
     import pyarrow as pa
@@ -51,8 +52,8 @@ def build_table(points: Sequence[Point], rows: Sequence[Row], scenario: str) -> 
     claims: list[str] = []
     for point in points:  # the claims in the scenario's order, then the metrics as met
         for claim in point.scenario.claims:
-            if f"claim:{claim.label}" not in claims:
-                claims.append(f"claim:{claim.label}")
+            if f"claim:{claim_key(claim)}" not in claims:
+                claims.append(f"claim:{claim_key(claim)}")
     for row in rows:
         for name in row:
             if name.startswith("metric:") and name[7:] not in metrics:

@@ -14,13 +14,13 @@ import traceback
 from collections.abc import Sequence
 from typing import Any
 
-from firefleet.scenarios.schema import Scenario
+from firefleet.scenarios.schema import Claim, Scenario
 
-__all__ = ["Row", "flat_metrics", "run_batch", "run_one"]
+__all__ = ["Row", "claim_key", "flat_metrics", "run_batch", "run_one"]
 
 Row = dict[str, Any]
-"""One run: ``point``, ``seed``, ``metric:NAME`` numbers, ``claim:LABEL`` verdicts,
-``run_time_s`` and ``error`` (None for a run that finished)."""
+"""One run: ``point``, ``seed``, ``metric:NAME`` numbers, ``claim:KEY`` verdicts
+(:func:`claim_key`), ``run_time_s`` and ``error`` (None for a run that finished)."""
 
 
 def flat_metrics(metrics: dict[str, Any]) -> dict[str, float]:
@@ -44,6 +44,20 @@ def flat_metrics(metrics: dict[str, Any]) -> dict[str, float]:
     return flat
 
 
+def claim_key(claim: Claim) -> str:
+    """A claim's name in a sweep's table and summary: its label and its bound, so that two
+    claims on one metric (``< 0.5`` and ``> 0.1``) stay apart.
+
+    Examples
+    --------
+    >>> from firefleet.scenarios import Claim
+    >>> from firefleet.sweep import claim_key
+    >>> claim_key(Claim(metric="wait_time_s", op="<", value=1.0, robot=2))
+    'wait_time_s[robot 2] < 1'
+    """
+    return f"{claim.label} {claim.expected}"
+
+
 def run_one(scenario: Scenario, point: int, seed: int) -> Row:
     """Run one (point, seed) and return its row; an exception becomes the row's error.
 
@@ -52,7 +66,7 @@ def run_one(scenario: Scenario, point: int, seed: int) -> Row:
     >>> from firefleet import load_scenario
     >>> from firefleet.sweep import run_one
     >>> row = run_one(load_scenario("motor-pid"), 0, 3)
-    >>> row["seed"], row["error"], row["claim:rise_time_s"], row["metric:rise_time_s"] < 0.2
+    >>> row["seed"], row["error"], row["claim:rise_time_s < 0.2"], row["metric:rise_time_s"] < 0.2
     (3, None, True, True)
     """
     from firefleet.sim.engine import simulate
@@ -65,7 +79,7 @@ def run_one(scenario: Scenario, point: int, seed: int) -> Row:
         for name, value in flat_metrics(metrics).items():
             row[f"metric:{name}"] = value
         for claim in scenario.claims:
-            row[f"claim:{claim.label}"] = claim.holds(metrics.get(claim.metric))
+            row[f"claim:{claim_key(claim)}"] = claim.holds(metrics.get(claim.metric))
         row["error"] = None
     except Exception as exc:  # a failing run is data: recorded, the sweep goes on
         where = traceback.extract_tb(exc.__traceback__)[-1:]
