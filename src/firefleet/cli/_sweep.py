@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from firefleet.cli._console import EXIT_OK
@@ -194,7 +195,7 @@ def _summary_table(summary: dict[str, Any]) -> Table:
 
     def rate(entry: dict[str, Any], label: str) -> str:
         value = entry["claims"][label]["pass_rate"]
-        return "n/a" if math.isnan(value) else f"{100 * value:.0f} %"
+        return "n/a" if math.isnan(value) else f"{100 * value:.0f}%"
 
     def point_name(entry: dict[str, Any]) -> str:
         return ", ".join(entry["values"].values()) or "all runs"
@@ -202,12 +203,15 @@ def _summary_table(summary: dict[str, Any]) -> Table:
     if summary["params"]:
         table.title = f"{table.title} at ({', '.join(summary['params'])})"
     if len(entries) <= 6:
-        table.add_column("claim", no_wrap=True)
+        table.add_column("claim", overflow="fold")
         for entry in entries:
-            table.add_column(point_name(entry), justify="right", overflow="fold")
-        table.add_row("runs (failed)", *(f"{e['runs']} ({e['failed']})" for e in entries))
+            table.add_column(escape(point_name(entry)), justify="right", no_wrap=True, min_width=4)
+        failed = sum(e["failed"] for e in entries)
+        table.caption = f"{entries[0]['runs']} runs per point" + (
+            f"; {failed} failed (not counted)" if failed else ""
+        )
         for label in labels:
-            table.add_row(label, *(rate(e, label) for e in entries))
+            table.add_row(escape(label), *(rate(e, label) for e in entries))
         return table
     table.add_column("point", overflow="fold")
     table.add_column("runs (failed)", justify="right")
@@ -215,11 +219,11 @@ def _summary_table(summary: dict[str, Any]) -> Table:
         table.add_column(f"c{k}", justify="right")
     for entry in entries:
         table.add_row(
-            point_name(entry),
+            escape(point_name(entry)),
             f"{entry['runs']} ({entry['failed']})",
             *(rate(entry, label) for label in labels),
         )
-    table.caption = "; ".join(f"c{k}: {label}" for k, label in enumerate(labels, start=1))
+    table.caption = escape("; ".join(f"c{k}: {label}" for k, label in enumerate(labels, start=1)))
     return table
 
 

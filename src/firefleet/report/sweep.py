@@ -118,7 +118,9 @@ def _metric_grid(table: pa.Table, claims: Sequence[Claim], key: str | None, titl
     groups = _groups(roles["metrics"])
     ncols = min(3, len(groups))
     nrows = math.ceil(len(groups) / ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(5.2 * ncols, 3.3 * nrows), squeeze=False)
+    fig, axes = plt.subplots(
+        nrows, ncols, figsize=(5.2 * ncols, 3.3 * nrows), squeeze=False, layout="constrained"
+    )
     if key is None:
         x, labels = np.asarray(data["seed"], dtype=np.float64), None
         series = [("", list(range(len(x))))]
@@ -163,7 +165,6 @@ def _metric_grid(table: pa.Table, claims: Sequence[Claim], key: str | None, titl
     for ax in axes.flat[len(groups) :]:
         ax.set_visible(False)
     fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
     return _png(fig)
 
 
