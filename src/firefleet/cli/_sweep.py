@@ -238,6 +238,7 @@ def cmd_sweep(args: argparse.Namespace, out: Console, err: Console) -> int:
         parse_seeds,
         parse_set,
         points_of,
+        reusable,
         run_points,
         summarize,
     )
@@ -255,7 +256,9 @@ def cmd_sweep(args: argparse.Namespace, out: Console, err: Console) -> int:
     interrupted = False
     start = time.monotonic()
     with staged_dir(dest, record=record) as stage:
-        with connect(args.scheduler, args.workers) as client:
+        needed = bool(reusable(points, seeds, previous)[1])  # no cluster for nothing
+        where = connect(args.scheduler, args.workers) if needed else contextlib.nullcontext()
+        with where as client:
             label = f"{scenario.name}: {len(points)} point(s) x {len(seeds)} seed(s)"
             try:
                 with sweep_progress(err, label) as progress:

@@ -57,6 +57,7 @@ __all__ = [
     "parse_set",
     "points_of",
     "read_parquet",
+    "reusable",
     "rows_of",
     "run_batch",
     "run_one",
@@ -73,20 +74,50 @@ def local_client(workers: int | None = None) -> Any:
     ``client.cluster.close()``) or use it in a ``with`` block."""
     import logging
     import os
+    import signal
+    import threading
 
     from distributed import Client, LocalCluster
 
     n = workers if workers is not None else (os.cpu_count() or 1)
     if n < 1:
         raise InputError(f"--workers must be >= 1, got {n}")
-    cluster = LocalCluster(  # type: ignore[no-untyped-call]
-        n_workers=n,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
+    # The workers start with Ctrl-C ignored: a terminal's Ctrl-C reaches every process of
+    # the group, and it is the client's to handle (cancel, keep what finished, close).
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        cluster = LocalCluster(  # type: ignore[no-untyped-call]
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, previous)
     return Client(cluster)  # type: ignore[no-untyped-call]
+
+
+def reusable(
+    points: Sequence[Point], seeds: Sequence[int], previous: pa.Table | None
+) -> tuple[list[Row], list[tuple[int, int]]]:
+    """The rows of ``previous`` to keep and the (point, seed) pairs still to run.
+
+    A run is kept when it finished (no error) and its point's scenario digest and seed
+    match; failed runs are run again.
+    """
+    digests = {p.digest: p.index for p in points}
+    kept: list[Row] = []
+    if previous is not None:
+        for row in rows_of(previous):
+            index = digests.get(row.pop("point_digest"))
+            if row["error"] is None and index is not None and row["seed"] in seeds:
+                kept.append({**row, "point": index})
+    done = {(r["point"], r["seed"]) for r in kept}
+    todo = [(p.index, s) for p in points for s in seeds if (p.index, s) not in done]
+    return kept, todo
 
 
 def run_points(
@@ -108,15 +139,7 @@ def run_points(
     SweepInterrupted
         On Ctrl-C; its ``rows`` then hold the reused and the finished runs.
     """
-    digests = {p.digest: p.index for p in points}
-    kept: list[Row] = []
-    if previous is not None:
-        for row in rows_of(previous):
-            index = digests.get(row.pop("point_digest"))
-            if row["error"] is None and index is not None and row["seed"] in seeds:
-                kept.append({**row, "point": index})
-    done = {(r["point"], r["seed"]) for r in kept}
-    todo = [(p.index, s) for p in points for s in seeds if (p.index, s) not in done]
+    kept, todo = reusable(points, seeds, previous)
     try:
         rows = execute(client, points, todo, progress=progress) if todo else []
     except SweepInterrupted as stop:
