@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +34,7 @@ __all__ = [
 ]
 
 _DUMP = pydantic.TypeAdapter(Scenario)
+_EXPONENT = re.compile(r"[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9]+)[eE][-+]?[0-9]+")
 
 
 @dataclass(frozen=True)
@@ -116,11 +118,8 @@ def _value(text: str, flag: str, base: Path) -> Any:
         value = yaml.safe_load(text)
     except yaml.YAMLError:
         raise InputError(f"{flag}: {text!r} is not a value (a number, a word, a [list])") from None
-    if isinstance(value, str):
-        try:  # YAML 1.1 reads 1e3 as a string; a person means a number
-            return float(value) if "e" in value.lower() and float(value) else value
-        except ValueError:
-            return value
+    if isinstance(value, str) and _EXPONENT.fullmatch(value):
+        return float(value)  # YAML 1.1 reads 1e3 as a string; a person means a number
     return value
 
 
@@ -142,9 +141,9 @@ def parse_set(text: str, *, base: Path | None = None) -> SweepAxis:
     Examples
     --------
     >>> from firefleet.sweep import parse_set
-    >>> axis = parse_set("command.speed_rad_s=1,2.5,1e1")
+    >>> axis = parse_set("command.speed_rad_s=1,2.5,1e1,0e0")
     >>> axis.key, axis.values, axis.labels
-    ('command.speed_rad_s', (1, 2.5, 10.0), ('1', '2.5', '1e1'))
+    ('command.speed_rad_s', (1, 2.5, 10.0, 0.0), ('1', '2.5', '1e1', '0e0'))
     >>> parse_set("poses=[[0, 0, 0]],[[0, 0, 0], [1, 0, 0]]").values[1]
     [[0, 0, 0], [1, 0, 0]]
     """
