@@ -40,5 +40,6 @@ def test_figures_for_a_numeric_and_a_text_key(tmp_path: Path) -> None:
     ]
     for name, data in figures.items():
         image = np.asarray(Image.open(io.BytesIO(data)).convert("L"))
-        assert image.shape[0] > 300 and image.shape[1] > 600, name
+        assert image.shape[0] > 300, name
+        assert image.shape[1] > 600, name
         assert image.std() > 10, name  # something is drawn
