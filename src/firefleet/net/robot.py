@@ -12,9 +12,10 @@ progress) for the team.
 The kind's decision is the in-process one, unchanged: it is called on the whole team's
 arrays, this robot's row holding its own estimate and the other rows the last
 positions the team heard (their ``State`` messages), and this robot's row of the result
-is what it sends. A kind whose robots are independent (path following) thus gives
-exactly the in-process numbers; a kind that couples them (formation) sees its
-neighbours as the network delivers them.
+is what it sends. A kind whose robots are independent (:data:`INDEPENDENT_KINDS`: path
+following, the motor steps) thus gives exactly the in-process numbers, and its robots do
+not listen to one another; a kind that couples them would see its neighbours as the
+network delivers them.
 
 The scenario comes pickled on stdin (from the plant that started the process); at the
 end the process writes its network counters as one JSON line on stdout.
@@ -52,6 +53,10 @@ from firefleet.sim.loop import DecideInputs, Decider
 from firefleet.sim.registry import task_kind
 
 __all__ = ["RobotController", "flat_series", "main"]
+
+INDEPENDENT_KINDS = frozenset({"path-following", "wheel-speed-step", "voltage-step"})
+"""Kinds whose robots decide from their own row alone: their processes do not listen to
+the team's states (each would decode N - 1 messages a tick for nothing)."""
 
 _HELLO_EVERY_S = 0.1
 """Hello is repeated this often [s] until the plant's first message arrives."""
@@ -169,9 +174,10 @@ def run_robot(scenario: Scenario, robot: int, run_id: int, connect: str) -> dict
         subscribers = [
             session.declare_subscriber(keys.sensors(robot), on_sample),
             session.declare_subscriber(keys.clock, on_sample),
-            session.declare_subscriber(keys.state("*"), on_sample),
             session.declare_subscriber(keys.progress, on_sample),
         ]
+        if scenario.command.kind not in INDEPENDENT_KINDS:
+            subscribers.append(session.declare_subscriber(keys.state("*"), on_sample))
         pub_command = session.declare_publisher(
             keys.command(robot), congestion_control=zenoh.CongestionControl.BLOCK
         )

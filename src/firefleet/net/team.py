@@ -245,7 +245,7 @@ def run_team(
     clock: str = "lockstep",
     timeout_s: float = 1.0,
     progress: ProgressCallback | None = None,
-    started: Callable[[list[int]], None] | None = None,
+    started: Callable[[dict[str, Any]], None] | None = None,
 ) -> tuple[SimResult, TeamRun]:
     """Run ``scenario`` with each robot's controller in its own process, over zenoh.
 
@@ -261,7 +261,9 @@ def run_team(
     progress : callable, optional
         ``progress(done, total)`` between chunks of ticks.
     started : callable, optional
-        Called with the robot processes' ids once they have all said hello.
+        Called once every robot has said hello, before the first tick, with
+        ``{"run_id": int, "endpoint": the plant's zenoh endpoint, "pids": the robot
+        processes' ids}``.
 
     Returns
     -------
@@ -324,7 +326,9 @@ def run_team(
                     ex.cond.wait(0.1)
             run.start_s = time.monotonic() - t_start
             if started is not None:
-                started([p.pid for p in procs])
+                started(
+                    {"run_id": run.run_id, "endpoint": endpoint, "pids": [p.pid for p in procs]}
+                )
             result = _plant(
                 scenario,
                 decider,
