@@ -138,6 +138,8 @@ def test_killed_robot_is_noticed_within_a_second_and_marked_failed() -> None:
     assert np.all(result.wheel_speed_ref_rad_s[failed_tick + 1 :, 1] == 0.0)
     assert not np.array_equal(result.pose[-1, 1], ref.pose[-1, 1])
     assert len(net.robots) == 2  # the two survivors said goodbye with their counters
+    for survivor in net.robots:  # and they, too, saw robot 2's token go within 1 s
+        assert 0.0 <= survivor["lost"]["2"] - killed["t"] < 1.0
 
 
 def _nan_state(run_id: int) -> bytes:
@@ -199,3 +201,19 @@ def test_rogue_publisher_is_dropped_and_counted() -> None:
     ref = _in_process(scenario)
     np.testing.assert_array_equal(result.pose, ref.pose)
     np.testing.assert_array_equal(result.wheel_speed_ref_rad_s, ref.wheel_speed_ref_rad_s)
+
+
+def test_realtime_clock_runs_every_tick_and_counts_what_misses() -> None:
+    """On the monotonic clock a command that misses its tick is held, not waited for:
+    every tick runs, and the misses plus the commands taken account for every tick."""
+    scenario = _short(1.0)
+    result, net = run_team(scenario, np.arange(scenario.n_steps + 1), clock="realtime")
+    ticks = scenario.n_steps + 1
+    assert net.ticks == ticks
+    assert result.pose.shape == (ticks, 3, 3)
+    assert np.all(np.isfinite(result.pose))
+    assert net.failed == {}
+    received = net.counters.received["Command"]
+    assert received <= 3 * ticks
+    assert all(0 <= m <= ticks for m in net.misses)
+    assert sum(net.misses) >= 3 * ticks - received  # every command not taken in time is a miss

@@ -17,8 +17,11 @@ following, the motor steps) thus gives exactly the in-process numbers, and its r
 not listen to one another; a kind that couples them would see its neighbours as the
 network delivers them.
 
-The scenario comes pickled on stdin (from the plant that started the process); at the
-end the process writes its network counters as one JSON line on stdout.
+It also watches the team's liveliness tokens: a robot whose process dies is noticed
+here when its token goes (``lost``: the monotonic time, comparable across the
+processes of one machine). The scenario comes pickled on stdin (from the plant that
+started the process); at the end the process writes its network counters and what it
+noticed as one JSON line on stdout.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import pickle
 import queue
 import sys
 import threading
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -46,7 +50,7 @@ from firefleet.net.messages import (
     TeamProgress,
     Tick,
 )
-from firefleet.net.transport import Counters, Keys, open_session
+from firefleet.net.transport import Counters, Keys, open_session, robot_of_key
 from firefleet.scenarios.schema import Scenario
 from firefleet.sim.drive import dead_reckoning, discretise_drive
 from firefleet.sim.loop import DecideInputs, Decider
@@ -169,8 +173,18 @@ def run_robot(scenario: Scenario, robot: int, run_id: int, connect: str) -> dict
 
     session = open_session(listen=["tcp/127.0.0.1:0"], connect=[connect])
     outcome = {"reason": 2}
+    lost: dict[str, float] = {}  # robot (1-based) -> monotonic time its token went [s]
+    stopping = threading.Event()
+
+    def on_token(sample: Any) -> None:
+        other = robot_of_key(str(sample.key_expr))
+        if other is None or sample.kind != zenoh.SampleKind.DELETE or stopping.is_set():
+            return
+        lost.setdefault(str(other + 1), time.monotonic())
+
     try:
         token = session.liveliness().declare_token(keys.alive(robot))
+        watch = session.liveliness().declare_subscriber(keys.alive_robots, on_token)
         subscribers = [
             session.declare_subscriber(keys.sensors(robot), on_sample),
             session.declare_subscriber(keys.clock, on_sample),
@@ -208,6 +222,7 @@ def run_robot(scenario: Scenario, robot: int, run_id: int, connect: str) -> dict
             elif isinstance(message, State):
                 controller.hear(message)
             elif isinstance(message, Tick) and message.robot == PLANT and message.stop:
+                stopping.set()
                 outcome["reason"] = 0
                 break
             elif isinstance(message, TeamProgress):
@@ -216,12 +231,13 @@ def run_robot(scenario: Scenario, robot: int, run_id: int, connect: str) -> dict
             session.put(
                 keys.bye(robot), counters.send(Bye(run_id, robot, 0, reason=outcome["reason"]))
             )
+        watch.undeclare()
         for sub in subscribers:
             sub.undeclare()
         token.undeclare()
     finally:
         session.close()
-    return {"robot": robot, "bye": outcome["reason"], **counters.document()}
+    return {"robot": robot, "bye": outcome["reason"], "lost": lost, **counters.document()}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
