@@ -110,6 +110,11 @@ class RobotController:
         self.dt_s = scenario.dt_s
         self.team_pose: FloatArray = scenario.initial_poses.copy()
         self.counts: FloatArray | None = None
+        # a warm-up decision (caches, compiled kernels) before the plant's first tick,
+        # so that tick 0 costs what every other tick does; then the memory afresh
+        state, params = self.decider.init(scenario)
+        estimate = self.team_pose.copy() if self.decider.uses_estimate else None
+        self.decider.decide(state, DecideInputs(0.0, 0, estimate, {}, {}), params, self.dt_s)
         self.state, self.params = self.decider.init(scenario)
 
     def step(self, sensors: Sensors) -> tuple[Command, State]:

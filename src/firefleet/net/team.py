@@ -105,12 +105,16 @@ class TeamRun:
         Each robot process's own counters (its last line on stdout), by robot.
     misses : list of int
         Ticks each robot's command missed (lock-step timeout or real-time deadline).
+    late : int
+        Commands that arrived after their tick was over (dropped).
     failed : dict of int to dict
         Robots whose process died: the tick and the monotonic time [s] it was noticed.
     wall_s : float
         Wall-clock time of the ticks [s] (start-up and shut-down excluded).
     ticks : int
         Ticks run.
+    start_s : float
+        Start-up: from spawning the robot processes to every robot's hello [s].
     """
 
     run_id: int
@@ -123,6 +127,7 @@ class TeamRun:
     wall_s: float = 0.0
     ticks: int = 0
     start_s: float = 0.0
+    late: int = 0
 
     def document(self) -> dict[str, Any]:
         """The network counters as metrics.json records them (``network``)."""
@@ -140,6 +145,7 @@ class TeamRun:
             "ticks_per_s": self.ticks / self.wall_s if self.wall_s > 0 else None,
             "start_up_s": self.start_s,
             "misses": self.misses,
+            "late_commands": self.late,
             "failed_robots": [i + 1 for i in sorted(self.failed)],
             "failures": {str(i + 1): v for i, v in sorted(self.failed.items())},
             "dropped_total": sum(dropped.values()),
@@ -344,6 +350,7 @@ def run_team(
             )
             with ex.cond:
                 ex.stopping = True
+                run.late = ex.late
             session.put(
                 keys.clock,
                 run.counters.send(
