@@ -19,7 +19,8 @@ Clocks:
   taken if it arrives before ``t0 + (k + 1) dt``; one that does not is *late* (counted;
   the last references are held).
 
-A robot whose process dies (its liveliness token goes: within 1 s, the link lease) is
+A robot whose process dies (its liveliness token goes: at once, or at the 0.8 s link
+lease for a process that hangs) is
 marked failed at the tick the plant notices it: its wheels get zero references from
 then on, its recorded series hold their last values, the others carry on, and the team
 progress it is listed in says it is not alive. The run then ends as usual.
@@ -365,7 +366,9 @@ def run_team(
                 ),
             )
             deadline = time.monotonic() + _EXIT_TIMEOUT_S
-            for _i, proc in enumerate(procs):
+            for i, proc in enumerate(procs):
+                if i in ex.dead:  # failed: nothing to wait for (a hung one is killed below)
+                    continue
                 try:
                     out, _ = proc.communicate(timeout=max(deadline - time.monotonic(), 0.1))
                 except subprocess.TimeoutExpired:

@@ -4,8 +4,8 @@ Every process (the plant and each robot) opens a zenoh session in ``peer`` mode 
 multicast scouting off: the plant listens on an explicit TCP endpoint on 127.0.0.1 and
 every robot connects to it (and listens on a port of its own that gossip tells the
 others about), so no router is needed and nothing leaves the machine. The link lease
-is 1 s (keep-alive every 250 ms): a process that dies, or hangs, loses its links, and
-with them its liveliness token, within a second at most; a process killed outright
+is 0.8 s (keep-alive every 200 ms): a process that dies, or hangs, loses its links, and
+with them its liveliness token, within 0.8 s at most; a process killed outright
 closes its sockets at once, and the others see its token go in milliseconds.
 
 Key expressions, under ``firefleet/<run-id>/`` (the run id as 16 hex digits)::
@@ -42,7 +42,7 @@ from firefleet.net.messages import Message, MessageError, decode, encode
 
 __all__ = ["LEASE_MS", "Counters", "Keys", "free_port", "open_session", "peer_config"]
 
-LEASE_MS = 1000
+LEASE_MS = 800
 """Link lease [ms]: a peer silent this long is dropped (its liveliness tokens go)."""
 
 
