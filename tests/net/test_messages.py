@@ -207,3 +207,25 @@ def test_encode_refuses_what_decode_would() -> None:
         encode(Command(1, 0, 0, t_s=0.0, reference_rad_s=(0, 0), series=(0.0,) * 65))
     with pytest.raises(MessageError, match="range"):
         encode(_state(robot=PLANT + 1))
+
+
+def test_path_progress_tracks_the_whole_path_search() -> None:
+    """The robot's tracked progress against the whole-path search of
+    PolynomialPath.distance, along a real run of experiment 1 (robot 1's odometry)."""
+    import numpy as np
+
+    from firefleet import load_scenario, simulate
+    from firefleet.net.robot import PathProgress
+    from firefleet.scenarios.schema import PathFollowing
+
+    scenario = load_scenario("coop-different-paths")
+    cmd = scenario.command
+    assert isinstance(cmd, PathFollowing)
+    odometry = simulate(scenario, record_every=10).extra["odometry_pose"][:, 0, :2]
+    path = cmd.paths[0]
+    track = PathProgress(path, cmd.pieces)
+    zeta = np.array([sum(track.update(x, y)) for x, y in odometry])
+    _, s = path.distance(odometry)
+    reference = s / path.length_m * cmd.pieces
+    assert np.max(np.abs(zeta - reference)) < 0.05  # a twentieth of a piece (4.7 mm)
+    assert zeta[-1] > cmd.pieces - 1

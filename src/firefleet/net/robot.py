@@ -51,12 +51,12 @@ from firefleet.net.messages import (
     Tick,
 )
 from firefleet.net.transport import Counters, Keys, open_session, robot_of_key
-from firefleet.scenarios.schema import Scenario
+from firefleet.scenarios.schema import PathFollowing, Scenario
 from firefleet.sim.drive import dead_reckoning, discretise_drive
 from firefleet.sim.loop import DecideInputs, Decider
 from firefleet.sim.registry import task_kind
 
-__all__ = ["RobotController", "flat_series", "main"]
+__all__ = ["INDEPENDENT_KINDS", "PathProgress", "RobotController", "flat_series", "main"]
 
 INDEPENDENT_KINDS = frozenset({"path-following", "wheel-speed-step", "voltage-step"})
 """Kinds whose robots decide from their own row alone: their processes do not listen to
@@ -81,6 +81,59 @@ def flat_series(series: dict[str, Any], names: Sequence[str], robot: int) -> tup
     """
     parts = [np.ravel(np.asarray(series[name], dtype=np.float64)[robot]) for name in names]
     return tuple(float(v) for v in np.concatenate(parts)) if parts else ()
+
+
+class PathProgress:
+    """A robot's progress along its path, tracked from its pose estimate.
+
+    The path is tabulated once (``samples`` points, their arc lengths); each update
+    looks for the nearest tabulated point within ``window`` points of the last one (a
+    robot moves a few millimetres a tick), so it costs some microseconds, not the
+    whole-path search of :meth:`firefleet.planning.paths.PolynomialPath.distance`.
+
+    Parameters
+    ----------
+    path : PolynomialPath
+        The robot's path.
+    pieces : int
+        Pieces the path is cut into (the trajectory's segments).
+
+    Examples
+    --------
+    >>> from firefleet.net.robot import PathProgress
+    >>> from firefleet.planning.paths import PolynomialPath
+    >>> path = PolynomialPath((0.0, 0.0), 0.0, 10.0)  # y = 0 from x = 0 to 10 m
+    >>> track = PathProgress(path, pieces=100)
+    >>> track.update(2.5, 0.3)
+    (25, 0.0)
+    >>> segment, fraction = track.update(2.55, -0.1)
+    >>> segment, round(fraction, 2)
+    (25, 0.5)
+    >>> PathProgress(path, pieces=100).update(12.0, 0.0)  # past the end
+    (100, 0.0)
+    """
+
+    def __init__(self, path: Any, pieces: int, samples: int = 8193, window: int = 128) -> None:
+        lo, hi = path.x_start_m, path.x_end_m
+        self.x = np.linspace(lo, hi, samples)
+        self.y = path.y(self.x)
+        self.s = np.asarray(path.arc_length(self.x), dtype=np.float64)
+        self.length_m = float(path.length_m)
+        self.pieces = pieces
+        self.window = window
+        self.index: int | None = None  # the first update searches the whole path
+
+    def update(self, x_m: float, y_m: float) -> tuple[int, float]:
+        """The segment index and the fraction along it [0, 1) of the point nearest
+        ``(x_m, y_m)``; at the path's end, (pieces, 0.0)."""
+        near = self.index
+        lo = 0 if near is None else max(near - self.window, 0)
+        hi = self.x.size if near is None else min(near + self.window + 1, self.x.size)
+        d2 = (self.x[lo:hi] - x_m) ** 2 + (self.y[lo:hi] - y_m) ** 2
+        self.index = lo + int(np.argmin(d2))
+        zeta = float(self.s[self.index]) / self.length_m * self.pieces
+        segment = min(int(zeta), self.pieces)
+        return segment, (min(zeta - segment, 1.0) if segment < self.pieces else 0.0)
 
 
 class RobotController:
@@ -116,6 +169,10 @@ class RobotController:
         estimate = self.team_pose.copy() if self.decider.uses_estimate else None
         self.decider.decide(state, DecideInputs(0.0, 0, estimate, {}, {}), params, self.dt_s)
         self.state, self.params = self.decider.init(scenario)
+        cmd = scenario.command
+        self.track = (
+            PathProgress(cmd.paths[robot], cmd.pieces) if isinstance(cmd, PathFollowing) else None
+        )
 
     def step(self, sensors: Sensors) -> tuple[Command, State]:
         """The command and state of tick ``sensors.tick`` from its sensor readings."""
@@ -138,17 +195,16 @@ class RobotController:
             reference_rad_s=(float(reference[0]), float(reference[1])),
             series=series,
         )
-        index = decision.series.get("desired_index")
-        segment = int(np.asarray(index)[i]) if index is not None else 0
-        arrived = np.asarray(self.state)[i] if np.ndim(self.state) == 1 else False
         pose = self.team_pose[i]
+        segment, fraction = (0, 0.0) if self.track is None else self.track.update(pose[0], pose[1])
+        arrived = np.asarray(self.state)[i] if np.ndim(self.state) == 1 else False
         state = State(
             *head,
             t_s=sensors.t_s,
             pose=(float(pose[0]), float(pose[1]), float(pose[2])),
             wheel_speed_rad_s=(float(sensors.measured_rad_s[0]), float(sensors.measured_rad_s[1])),
-            segment=max(segment, 0),
-            fraction=0.0,
+            segment=segment,
+            fraction=fraction,
             arrived=bool(arrived),
         )
         return command, state
