@@ -16,14 +16,14 @@ Clocks:
   references are held). The run does not depend on the machine's speed: with an
   independent kind (path following) it equals the in-process staged run bit for bit.
 - ``realtime``: tick k starts at ``t0 + k dt`` on the monotonic clock and a command is
-  taken if it arrives before ``t0 + (k + 1) dt``; one that does not is *late* (counted;
-  the last references are held).
+  taken if it arrives before ``t0 + (k + 1) dt``; one that does not is a miss (counted;
+  the last references are held), and dropped as *late* when it comes.
 
 A robot whose process dies (its liveliness token goes: at once, or at the 0.8 s link
-lease for a process that hangs) is
-marked failed at the tick the plant notices it: its wheels get zero references from
-then on, its recorded series hold their last values, the others carry on, and the team
-progress it is listed in says it is not alive. The run then ends as usual.
+lease for a process that hangs) is marked failed at the tick the plant notices it: its
+wheels get zero references from then on, its recorded series hold their last values,
+the others carry on, and the team progress it is listed in says it is not alive. The
+run then ends as usual.
 
 Examples
 --------
