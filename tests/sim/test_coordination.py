@@ -40,7 +40,7 @@ def test_coop_motor_fault_passes_closed_loop_and_fails_on_the_clock() -> None:
     # the team waited for robot 2: later than on the clock, and together
     assert min(closed["arrival_time_s"]) > max(
         clock["arrival_time_s"][0], clock["arrival_time_s"][2]
-    )  # type: ignore[index]
+    )
 
 
 def test_the_fault_slows_the_robot_and_without_it_closed_equals_the_clock_bit_for_bit() -> None:

@@ -25,7 +25,7 @@ experiments give the same results bit for bit); they part when a robot falls beh
 (``coop-motor-fault``). Each robot's broadcast is the outbox's ``zeta`` [segments] and
 ``zeta_rate`` [segments/s], (N,); the inbox brings them back either as (N,), heard
 alike by everyone one tick later (the ideal link), or as (N, N) rows per receiver with
-``zeta_age_s`` (:mod:`firefleet.sim.link`).
+their ages ``age_s`` (N, N) (:mod:`firefleet.sim.link`).
 """
 
 from __future__ import annotations
@@ -187,7 +187,7 @@ def _heard(
         zeta, rate = np.broadcast_to(zeta, (n, m)), np.broadcast_to(rate, (n, m))
         age = np.full((n, m), dt_s)
     else:
-        age = np.asarray(inbox["zeta_age_s"])
+        age = np.asarray(inbox["age_s"])
     return heard_minimum(zeta, rate, age, timeout_s)
 
 
@@ -452,7 +452,8 @@ def path_following_metrics(result: SimResult) -> Metrics:
     stays within one piece of every other's: the formation of Figures 32 and 36,
     measured on the paths' average length; NaN for one robot); ``odometry_drift_m``
     (distance between dead reckoning and the true pose at the end); ``peak_current_a``;
-    ``max_voltage_v``. Times are NaN where the event never happens.
+    ``max_voltage_v``; ``messages_sent``, ``messages_lost``, ``message_age_max_s``
+    (:func:`_link_metrics`). Times are NaN where the event never happens.
     """
     cmd = _command(result.scenario)
     t = result.t
@@ -514,7 +515,25 @@ def path_following_metrics(result: SimResult) -> Metrics:
     out["odometry_drift_m"] = [float(v) for v in np.hypot(*(odom[-1, :, :2] - xy[-1]).T)]
     out["peak_current_a"] = float(np.abs(result.current_a).max())
     out["max_voltage_v"] = float(np.abs(result.voltage_v).max())
+    out.update(_link_metrics(result, cmd))
     return out
+
+
+def _link_metrics(result: SimResult, cmd: PathFollowing) -> Metrics:
+    """``messages_sent`` and ``messages_lost`` (per directed pair, the link's counters;
+    over the ideal link every robot hears every other at every tick after the first,
+    none lost; nothing on the clock alone) and ``message_age_max_s`` (the oldest value
+    the law used; NaN if none)."""
+    extra = result.extra
+    n = result.pose.shape[1]
+    if "messages_sent" in extra:
+        sent, lost = float(extra["messages_sent"][-1]), float(extra["messages_lost"][-1])
+    else:
+        steps = result.scenario.n_steps if cmd.coordination == "closed" else 0
+        sent, lost = float(n * (n - 1) * steps), 0.0
+    age = extra["message_age_max_s"]
+    age_max = float(np.nanmax(age)) if np.any(np.isfinite(age)) else math.nan
+    return {"messages_sent": sent, "messages_lost": lost, "message_age_max_s": age_max}
 
 
 def _sync_distance(progress: FloatArray, pieces: int, length_m: float) -> float:
@@ -562,6 +581,9 @@ KINDS = (
             "odometry_drift_m",
             "peak_current_a",
             "max_voltage_v",
+            "messages_sent",
+            "messages_lost",
+            "message_age_max_s",
         ),
         metrics=path_following_metrics,
         figures=_figures,
