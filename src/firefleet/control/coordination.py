@@ -131,14 +131,15 @@ def coordinated_release(
 
     Examples
     --------
-    A point falls due at tick 10 (0.1 s); robot 2 has heard a progress 12 segments
-    behind it and holds it, robot 3 has heard nothing and releases it:
+    Point 41 falls due at tick 400 (4 s, a point every 0.1 s); robot 2 has heard a
+    progress 12 segments behind it and holds it, robot 3 has heard nothing and releases
+    it:
 
     >>> import numpy as np
     >>> from firefleet.control.coordination import coordinated_release
     >>> released, held = np.array([40, 40, 40]), np.array([0, 0, 0])
     >>> zmin = np.array([38.5, 29.0, np.nan])
-    >>> j, held = coordinated_release(released, held, 10, 0.01, 0.1, zmin, 10)
+    >>> j, held = coordinated_release(released, held, 400, 0.01, 0.1, zmin, 10)
     >>> j.tolist(), held.tolist()
     ([41, 40, 41], [0, 1, 0])
     """

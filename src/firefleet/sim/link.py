@@ -30,9 +30,11 @@ link, seeded, applied per directed pair of robots to every message that crosses 
 
 Receivers hold the last value from each sender with its age: the inbox the decision
 sees holds, for each key the team broadcasts, an (N, N) array (row ``i``: what robot
-``i`` holds from each robot; its own broadcast at once) and ``age_s`` (N, N) [s] (inf:
-nothing heard yet). The controllers predict from the last known rate and flag values
-older than a timeout (:mod:`firefleet.control.coordination`).
+``i`` holds from each robot; its own broadcast at once) and ``sent_tick`` (N, N), the
+tick each value was sent at (-1: nothing heard yet; its age at tick ``k`` is
+``(k - sent_tick) dt``, :func:`ages`). The link itself touches only the pairs a frame
+crosses, never all N^2 of them at a tick. The controllers predict from the last known
+rate and flag values older than a timeout (:mod:`firefleet.control.coordination`).
 
 Presets (:data:`PRESETS`): the data sheets' rate, transmit power and receiver
 sensitivity; the range is the link budget (power - sensitivity) spent by the
@@ -93,10 +95,24 @@ __all__ = [
     "LinkModel",
     "LinkParams",
     "LinkState",
+    "ages",
     "message_bytes",
     "packet_error_rate",
     "wall_cells",
 ]
+
+
+def ages(sent_tick: FloatArray, step: int, dt_s: float) -> FloatArray:
+    """The ages [s] of held values sent at ``sent_tick`` (-1: none, inf), at tick ``step``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.link import ages
+    >>> ages(np.array([[9.0, -1.0]]), 10, 0.01).tolist()
+    [[0.01, inf]]
+    """
+    return np.where(sent_tick >= 0, (step - sent_tick) * dt_s, np.inf)
 
 
 def message_bytes() -> int:
@@ -351,7 +367,7 @@ class LinkState:
     flight_val: FloatArray
     n_flight: IntArray
     held_val: FloatArray
-    held_tick: IntArray
+    held_tick: FloatArray
     counters: FloatArray
     rng: np.random.Generator
     dt_s: float
@@ -374,14 +390,15 @@ class LinkModel:
     Examples
     --------
     >>> import numpy as np
-    >>> from firefleet.sim.link import LinkModel, LinkParams
+    >>> from firefleet.sim.link import LinkModel, LinkParams, ages
     >>> link = LinkModel(LinkParams(delay_s=0.025))
     >>> state = link.init(2, 0.01)
     >>> pose = np.zeros((2, 3))
     >>> sent = {"zeta": np.array([1.0, 2.0])}
     >>> for k in range(1, 5):  # sent at tick 0 only
     ...     inbox, state = link.exchange(state, sent if k == 1 else {}, k * 0.01, pose)
-    ...     print(k, inbox["zeta"][1].tolist(), inbox["age_s"][1].round(3).tolist())
+    ...     age = ages(inbox["sent_tick"], k, 0.01)
+    ...     print(k, inbox["zeta"][1].tolist(), age[1].round(3).tolist())
     1 [nan, 2.0] [inf, 0.01]
     2 [nan, 2.0] [inf, 0.02]
     3 [1.0, 2.0] [0.03, 0.03]
@@ -417,7 +434,7 @@ class LinkModel:
             flight_val=np.zeros((cap, 0)),
             n_flight=np.zeros(1, dtype=np.int64),
             held_val=np.full((n_robots, n_robots, 0), np.nan),
-            held_tick=np.full((n_robots, n_robots), -1, dtype=np.int64),
+            held_tick=np.full((n_robots, n_robots), -1.0),
             counters=np.zeros(4),
             rng=np.random.default_rng([self.seed, 0x11A4]),
             dt_s=dt_s,
@@ -508,9 +525,8 @@ class LinkModel:
                 state.held_tick,
                 state.counters,
             )
-        age = np.where(state.held_tick >= 0, (k - state.held_tick) * dt, np.inf)
         inbox = {key: state.held_val[:, :, c] for c, key in enumerate(state.keys)}
-        inbox["age_s"] = age
+        inbox["sent_tick"] = state.held_tick
         return inbox, state
 
     def _start(self, state: LinkState, keys: tuple[str, ...]) -> None:

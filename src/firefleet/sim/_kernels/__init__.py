@@ -38,6 +38,7 @@ from firefleet.sim._kernels._parallel import PARALLEL_MIN_ROBOTS, PARALLEL_MIN_R
 from firefleet.sim._kernels._path_following import (
     path_following_chunk,
     path_following_chunk_coupled,
+    path_following_chunk_coupled_parallel,
     path_following_chunk_parallel,
 )
 
@@ -49,6 +50,7 @@ __all__ = [
     "motor_team_chunk_parallel",
     "path_following_chunk",
     "path_following_chunk_coupled",
+    "path_following_chunk_coupled_parallel",
     "path_following_chunk_parallel",
     "run_motor_team",
 ]

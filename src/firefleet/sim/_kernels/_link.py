@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 
 import numba
-import numpy as np
 
 from firefleet._typing import FloatArray, IntArray
 
@@ -50,7 +49,7 @@ def link_tick(
     flight_val: FloatArray,
     n_flight: IntArray,
     held_val: FloatArray,
-    held_tick: IntArray,
+    held_tick: FloatArray,
     counters: FloatArray,
 ) -> None:  # pragma: no cover - compiled
     """One tick of the link, in place: the broadcasts generated at tick ``k - 1`` join
@@ -86,8 +85,8 @@ def link_tick(
         Frames in flight: arrival time [s] (C,), (sender, receiver, generation tick)
         (C, 3), values (C, M), and their count (1,).
     held_val, held_tick
-        What each receiver holds from each sender: values (N, N, M) and generation tick
-        (N, N), -1 for nothing yet.
+        What each receiver holds from each sender: values (N, N, M) and the tick it was
+        sent at (N, N; an integer as a float), -1 for nothing yet.
     counters : ndarray, shape (4,)
         Messages sent, lost (channel, range or queue), dropped at a full queue, frames
         put on the air (cumulative).
@@ -108,7 +107,7 @@ def link_tick(
         if send[i] == 0:
             continue
         # the sender hears itself at once
-        held_tick[i, i] = k - 1
+        held_tick[i, i] = float(k - 1)
         for c in range(m):
             held_val[i, i, c] = payload[i, c]
         if queue_len[i] >= capacity:
@@ -189,7 +188,7 @@ def link_tick(
         if flight_t[f] <= t_now + 1e-12:
             i, j, gen = flight_i[f, 0], flight_i[f, 1], flight_i[f, 2]
             if gen > held_tick[j, i]:
-                held_tick[j, i] = gen
+                held_tick[j, i] = float(gen)
                 for c in range(m):
                     held_val[j, i, c] = flight_val[f, c]
             last = n_flight[0] - 1

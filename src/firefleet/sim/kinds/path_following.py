@@ -25,7 +25,7 @@ experiments give the same results bit for bit); they part when a robot falls beh
 (``coop-motor-fault``). Each robot's broadcast is the outbox's ``zeta`` [segments] and
 ``zeta_rate`` [segments/s], (N,); the inbox brings them back either as (N,), heard
 alike by everyone one tick later (the ideal link), or as (N, N) rows per receiver with
-their ages ``age_s`` (N, N) (:mod:`firefleet.sim.link`).
+the ticks they were sent at, ``sent_tick`` (N, N) (:mod:`firefleet.sim.link`).
 """
 
 from __future__ import annotations
@@ -57,8 +57,10 @@ from firefleet.sim._kernels import (
     PARALLEL_MIN_ROBOTS_ONE_PIECE,
     path_following_chunk,
     path_following_chunk_coupled,
+    path_following_chunk_coupled_parallel,
     path_following_chunk_parallel,
 )
+from firefleet.sim.link import ages
 from firefleet.sim.loop import DecideInputs, Decider, ProgressCallback, WheelCommand, chunk_bounds
 from firefleet.sim.registry import Metrics, TaskKind
 from firefleet.sim.result import SimResult
@@ -176,7 +178,7 @@ def _desired_at(traj: Trajectory, j: NDArray[np.int64]) -> FloatArray:
 
 
 def _heard(
-    inbox: Mapping[str, FloatArray], n: int, dt_s: float, timeout_s: float
+    inbox: Mapping[str, FloatArray], n: int, step: int, dt_s: float, timeout_s: float
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """zmin, age_max, stale (each (N,)) from the inbox; NaN, NaN, 0 if nothing came."""
     if "zeta" not in inbox:
@@ -187,7 +189,7 @@ def _heard(
         zeta, rate = np.broadcast_to(zeta, (n, m)), np.broadcast_to(rate, (n, m))
         age = np.full((n, m), dt_s)
     else:
-        age = np.asarray(inbox["age_s"])
+        age = ages(np.asarray(inbox["sent_tick"]), step, dt_s)
     return heard_minimum(zeta, rate, age, timeout_s)
 
 
@@ -220,7 +222,7 @@ def path_following_decide(
     traj = params.trajectory
     n = pose.shape[0]
     if params.closed:
-        zmin, age_max, stale = _heard(inputs.inbox, n, dt_s, params.timeout_s)
+        zmin, age_max, stale = _heard(inputs.inbox, n, inputs.step, dt_s, params.timeout_s)
     else:
         zmin, age_max, stale = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n)
     # a robot that has arrived holds no point back (it has stopped for good)
@@ -362,10 +364,15 @@ def _kernel_chunk(buffers: _Buffers, k0: int, k1: int, *, one_piece: bool = Fals
     Robots run on every core from ``PARALLEL_MIN_ROBOTS`` robots (one whole run from
     ``PARALLEL_MIN_ROBOTS_ONE_PIECE``); the result is the same bit for bit. Closed-loop
     coordination couples the robots: the kernel then goes tick by tick."""
-    if buffers.closed:
-        path_following_chunk_coupled(k0, k1, *buffers.args)
-        return
     n = buffers.scenario.n_robots
+    if buffers.closed:
+        coupled = (
+            path_following_chunk_coupled_parallel
+            if n >= PARALLEL_MIN_ROBOTS
+            else path_following_chunk_coupled
+        )
+        coupled(k0, k1, *buffers.args)
+        return
     parallel = n >= (PARALLEL_MIN_ROBOTS_ONE_PIECE if one_piece else PARALLEL_MIN_ROBOTS)
     kernel = path_following_chunk_parallel if parallel else path_following_chunk
     kernel(k0, k1, *buffers.args)
