@@ -25,7 +25,8 @@ experiments give the same results bit for bit); they part when a robot falls beh
 (``coop-motor-fault``). Each robot's broadcast is the outbox's ``zeta`` [segments] and
 ``zeta_rate`` [segments/s], (N,); the inbox brings them back either as (N,), heard
 alike by everyone one tick later (the ideal link), or as (N, N) rows per receiver with
-the ticks they were sent at, ``sent_tick`` (N, N) (:mod:`firefleet.sim.link`).
+the ticks they were sent at, ``sent_tick`` (N, N) (:mod:`firefleet.sim.link`), or
+their ages ``zeta_age_s`` (N, N) [s] (:mod:`firefleet.net`'s relay).
 """
 
 from __future__ import annotations
@@ -189,7 +190,10 @@ def _heard(
         zeta, rate = np.broadcast_to(zeta, (n, m)), np.broadcast_to(rate, (n, m))
         age = np.full((n, m), dt_s)
     else:
-        age = ages(np.asarray(inbox["sent_tick"]), step, dt_s)
+        if "sent_tick" in inbox:  # the link model: the tick each value was sent at
+            age = ages(np.asarray(inbox["sent_tick"]), step, dt_s)
+        else:  # ages as such (firefleet.net's relay: +inf for a robot gone)
+            age = np.asarray(inbox["zeta_age_s"])
     return heard_minimum(zeta, rate, age, timeout_s)
 
 
