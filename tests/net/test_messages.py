@@ -229,3 +229,20 @@ def test_path_progress_tracks_the_whole_path_search() -> None:
     reference = s / path.length_m * cmd.pieces
     assert np.max(np.abs(zeta - reference)) < 0.05  # a twentieth of a piece (4.7 mm)
     assert zeta[-1] > cmd.pieces - 1
+
+
+def test_transport_config_is_loopback_peer_without_multicast() -> None:
+    from firefleet.errors import InputError
+    from firefleet.net.transport import Keys, peer_config, robot_of_key
+
+    cfg = peer_config(listen=["tcp/127.0.0.1:7447"], connect=["tcp/127.0.0.1:7448"])
+    assert cfg["mode"] == "peer"
+    assert cfg["scouting"]["multicast"]["enabled"] is False
+    assert cfg["connect"]["endpoints"] == ["tcp/127.0.0.1:7448"]
+    assert cfg["transport"]["link"]["tx"]["lease"] <= 1000  # a hung peer goes within 1 s
+    with pytest.raises(InputError, match="loopback"):
+        peer_config(listen=["tcp/0.0.0.0:7447"], connect=[])
+    keys = Keys(run_id=2**64 - 1)
+    assert keys.state(3) == "firefleet/ffffffffffffffff/robot/3/state"
+    assert robot_of_key(keys.alive(41)) == 41
+    assert robot_of_key(keys.progress) is None

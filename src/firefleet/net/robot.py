@@ -246,6 +246,12 @@ def run_robot(scenario: Scenario, robot: int, run_id: int, connect: str) -> dict
     try:
         token = session.liveliness().declare_token(keys.alive(robot))
         watch = session.liveliness().declare_subscriber(keys.alive_robots, on_token)
+
+        def on_plant(sample: Any) -> None:  # the plant's process is gone: leave too
+            if sample.kind == zenoh.SampleKind.DELETE:
+                inbox.put(None)
+
+        plant_watch = session.liveliness().declare_subscriber(keys.alive_plant, on_plant)
         subscribers = [
             session.declare_subscriber(keys.sensors(robot), on_sample),
             session.declare_subscriber(keys.clock, on_sample),
@@ -272,6 +278,8 @@ def run_robot(scenario: Scenario, robot: int, run_id: int, connect: str) -> dict
                     outcome["reason"] = 3
                     break
                 continue
+            if message is None:
+                break  # Bye "stopped": the plant died
             idle_s = 0.0
             started = True
             if isinstance(message, Sensors) and message.robot == robot:
@@ -293,6 +301,7 @@ def run_robot(scenario: Scenario, robot: int, run_id: int, connect: str) -> dict
                 keys.bye(robot), counters.send(Bye(run_id, robot, 0, reason=outcome["reason"]))
             )
         watch.undeclare()
+        plant_watch.undeclare()
         for sub in subscribers:
             sub.undeclare()
         token.undeclare()
