@@ -485,7 +485,11 @@ def _plant(
         return None, WheelCommand(reference_rad_s=last_ref.copy(), series=series)
 
     stages = Stages(
-        world=StaticWorld(torque_n_m=scenario.load.torque_n_m, start_s=scenario.load.start_s),
+        world=StaticWorld(  # the world of the in-process loop, its motor faults included
+            torque_n_m=scenario.load.torque_n_m,
+            start_s=scenario.load.start_s,
+            faults=scenario.faults,
+        ),
         sensors=_NetSensors(),
         estimation=NoEstimation(),
     )
