@@ -52,7 +52,7 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
-from firefleet.net.messages import PLANT, Bye, Command, Hello, Sensors, State, TeamProgress, Tick
+from firefleet.net.messages import PLANT, Command, Hello, Sensors, TeamProgress, Tick
 from firefleet.net.robot import DecisionLayout, decision_layout
 from firefleet.net.transport import Counters, Keys, free_port, open_session, robot_of_key
 from firefleet.scenarios.schema import Scenario
@@ -167,7 +167,6 @@ class _Exchange:
         self.alive: set[int] = set()
         self.dead: set[int] = set()
         self.commands: dict[int, Command] = {}
-        self.progress = np.zeros(run.n_robots)
         self.late = 0
         self.tick = 0
         self.stopping = False
@@ -187,10 +186,6 @@ class _Exchange:
                     self.commands[msg.robot] = msg
                 else:
                     self.late += 1
-            elif isinstance(msg, State):
-                self.progress[msg.robot] = msg.segment + msg.fraction
-            elif isinstance(msg, Bye):
-                pass
             self.cond.notify_all()
 
     def on_token(self, sample: Any) -> None:
