@@ -11,11 +11,14 @@ progress) for the team.
 
 The kind's decision is the in-process one, unchanged: it is called on the whole team's
 arrays, this robot's row holding its own estimate and the other rows the last
-positions the team heard (their ``State`` messages), and this robot's row of the result
-is what it sends. A kind whose robots are independent (:data:`INDEPENDENT_KINDS`: path
-following, the motor steps) thus gives exactly the in-process numbers, and its robots do
-not listen to one another; a kind that couples them would see its neighbours as the
-network delivers them.
+positions the team heard (their ``State`` messages), with the inbox the in-process
+ideal link would deliver (the team's broadcast of the last tick, which the plant relays
+in :class:`~firefleet.net.messages.TeamProgress`: :func:`team_inbox`), and this robot's
+row of the result is what it sends. A kind whose decision reads no other robot's pose
+(:data:`INDEPENDENT_KINDS`: path following, whose robots share only their progress
+broadcast, and the motor steps) thus gives exactly the in-process numbers, and its
+robots do not listen to one another's states; a kind that reads its neighbours' poses
+would see them as the network delivers them.
 
 It also watches the team's liveliness tokens: a robot whose process dies is noticed
 here when its token goes (``lost``: the monotonic time, comparable across the
@@ -60,8 +63,9 @@ from firefleet.sim.registry import task_kind
 __all__ = ["INDEPENDENT_KINDS", "PathProgress", "RobotController", "flat_series", "main"]
 
 INDEPENDENT_KINDS = frozenset({"path-following", "wheel-speed-step", "voltage-step"})
-"""Kinds whose robots decide from their own row alone: their processes do not listen to
-the team's states (each would decode N - 1 messages a tick for nothing)."""
+"""Kinds whose decision reads no other robot's pose (what they share goes through the
+broadcast): their processes do not listen to the team's states (each would decode N - 1
+messages a tick for nothing)."""
 
 _HELLO_EVERY_S = 0.1
 """Hello is repeated this often [s] until the plant's first message arrives."""
