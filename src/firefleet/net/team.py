@@ -52,7 +52,7 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
-from firefleet.net.messages import PLANT, Command, Hello, Sensors, TeamProgress, Tick
+from firefleet.net.messages import MAX_SERIES, PLANT, Command, Hello, Sensors, TeamProgress, Tick
 from firefleet.net.robot import DecisionLayout, decision_layout
 from firefleet.net.transport import Counters, Keys, free_port, open_session, robot_of_key
 from firefleet.scenarios.schema import Scenario
@@ -270,7 +270,9 @@ def run_team(
     Raises
     ------
     InputError
-        For a kind without a decision on the world loop, a team over :data:`MAX_TEAM`,
+        For a kind without a decision on the world loop (or one whose command would carry
+        more than :data:`~firefleet.net.messages.MAX_SERIES` values), a team over
+        :data:`MAX_TEAM`,
         an unknown clock, or robot processes that do not start.
     """
     kind = task_kind(scenario.command.kind)
@@ -287,6 +289,12 @@ def run_team(
         )
     decider = kind.decider
     layout = decision_layout(scenario, decider)
+    if layout.series_size + layout.width > MAX_SERIES:
+        raise InputError(
+            f"command.kind: {kind.name!r} records and broadcasts "
+            f"{layout.series_size + layout.width} values per robot a tick; a command "
+            f"carries at most {MAX_SERIES}"
+        )
     run = TeamRun(run_id=secrets.randbits(64), clock=clock, n_robots=n, misses=[0] * n)
     keys = Keys(run.run_id)
     ex = _Exchange(run)
