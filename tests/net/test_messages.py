@@ -79,14 +79,18 @@ messages: st.SearchStrategy[Message] = st.one_of(
         st.tuples(speed, speed),
         st.lists(value, max_size=MAX_SERIES).map(tuple),
     ),
-    st.integers(0, 40).flatmap(
-        lambda n: st.builds(
+    st.tuples(st.integers(0, 30), st.integers(0, 3)).flatmap(
+        lambda nm: st.builds(
             TeamProgress,
             u64,
             robot,
             tick,
-            st.lists(st.floats(0.0, 1e6), min_size=n, max_size=n).map(tuple),
-            st.lists(st.booleans(), min_size=n, max_size=n).map(tuple),
+            st.just(nm[1]),
+            st.lists(value, min_size=nm[0] * nm[1], max_size=nm[0] * nm[1]).map(tuple),
+            st.lists(st.one_of(time_s, st.just(math.inf)), min_size=nm[0], max_size=nm[0]).map(
+                tuple
+            ),
+            st.lists(st.booleans(), min_size=nm[0], max_size=nm[0]).map(tuple),
         )
     ),
 )
@@ -146,9 +150,33 @@ def test_sizes_are_the_documented_ones() -> None:
     assert encoded_size(Command(*head, t_s=0, reference_rad_s=(0, 0), series=(1.0,) * 13)) == (
         20 + 25 + 8 * 13
     )
-    assert encoded_size(TeamProgress(*head, progress=(0.0,) * 20, alive=(True,) * 20)) == (
-        20 + 2 + 9 * 20
+    team = TeamProgress(*head, width=2, values=(0.0,) * 40, age_s=(0.01,) * 20, alive=(True,) * 20)
+    assert encoded_size(team) == 20 + 3 + 8 * 40 + 9 * 20
+
+
+def test_none_and_never_heard_cross_as_nan_and_inf() -> None:
+    """A series value may be NaN ("none") and a never-heard age +inf; nothing else
+    non-finite passes."""
+    cmd = Command(1, 0, 3, t_s=0.03, reference_rad_s=(1.0, 2.0), series=(math.nan, 4.0))
+    back = decode(encode(cmd))
+    assert isinstance(back, Command)
+    assert math.isnan(back.series[0])
+    assert back.series[1] == 4.0
+    team = TeamProgress(
+        1, PLANT, 3, width=1, values=(math.nan, 2.0), age_s=(math.inf, 0.01), alive=(False, True)
     )
+    again = decode(encode(team))
+    assert isinstance(again, TeamProgress)
+    assert math.isnan(again.values[0])
+    assert again.age_s == (math.inf, 0.01)
+    with pytest.raises(MessageError, match="nonfinite"):
+        encode(Command(1, 0, 3, t_s=0.0, reference_rad_s=(1.0, 2.0), series=(math.inf,)))
+    with pytest.raises(MessageError, match="nonfinite"):
+        encode(Command(1, 0, 3, t_s=0.0, reference_rad_s=(math.nan, 2.0)))
+    with pytest.raises(MessageError, match="range"):
+        encode(TeamProgress(1, PLANT, 3, width=0, values=(), age_s=(-1.0,), alive=(True,)))
+    with pytest.raises(MessageError, match="size"):
+        encode(TeamProgress(1, PLANT, 3, width=2, values=(1.0,), age_s=(0.0,), alive=(True,)))
 
 
 def _state(**change: object) -> State:
@@ -229,3 +257,20 @@ def test_path_progress_tracks_the_whole_path_search() -> None:
     reference = s / path.length_m * cmd.pieces
     assert np.max(np.abs(zeta - reference)) < 0.05  # a twentieth of a piece (4.7 mm)
     assert zeta[-1] > cmd.pieces - 1
+
+
+def test_transport_config_is_loopback_peer_without_multicast() -> None:
+    from firefleet.errors import InputError
+    from firefleet.net.transport import Keys, peer_config, robot_of_key
+
+    cfg = peer_config(listen=["tcp/127.0.0.1:7447"], connect=["tcp/127.0.0.1:7448"])
+    assert cfg["mode"] == "peer"
+    assert cfg["scouting"]["multicast"]["enabled"] is False
+    assert cfg["connect"]["endpoints"] == ["tcp/127.0.0.1:7448"]
+    assert cfg["transport"]["link"]["tx"]["lease"] <= 1000  # a hung peer goes within 1 s
+    with pytest.raises(InputError, match="loopback"):
+        peer_config(listen=["tcp/0.0.0.0:7447"], connect=[])
+    keys = Keys(run_id=2**64 - 1)
+    assert keys.state(3) == "firefleet/ffffffffffffffff/robot/3/state"
+    assert robot_of_key(keys.alive(41)) == 41
+    assert robot_of_key(keys.progress) is None

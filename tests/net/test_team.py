@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import psutil  # type: ignore[import-untyped]  # no type information shipped
 import pytest
+import zenoh
 
 from firefleet import load_scenario
 from firefleet.cli._main import main
@@ -163,7 +164,7 @@ def test_rogue_publisher_is_dropped_and_counted() -> None:
         session = open_session(listen=["tcp/127.0.0.1:0"], connect=[info["endpoint"]])
         rogue["session"] = session
         pubs = {
-            key: session.declare_publisher(key)
+            key: session.declare_publisher(key, congestion_control=zenoh.CongestionControl.BLOCK)
             for key in (keys.command(0), keys.state(1), keys.sensors(2))
         }
         deadline = time.monotonic() + 10.0
@@ -195,7 +196,7 @@ def test_rogue_publisher_is_dropped_and_counted() -> None:
         "foreign": repeats,
         "robot": repeats,
         "nonfinite": repeats,
-    }
+    }, net.document()
     robot_3 = next(r for r in net.robots if r["robot"] == 2)
     assert robot_3["dropped"] == {"magic": repeats}
     assert net.document()["dropped_total"] == 7 * repeats

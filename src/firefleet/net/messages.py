@@ -29,8 +29,11 @@ Sensors        4     t_s [s], encoder counts (2) [counts], measured wheel       
 State          5     t_s [s], pose (x, y [m], heading [rad]), wheel speeds (2)   61
                      [rad/s], segment [u32], fraction along it [1], arrived [u8]
 Command        6     t_s [s], wheel-speed references (2) [rad/s], count [u8],    25 + 8 n
-                     n values the controller reports (n <= 64)
-TeamProgress   7     count [u16], n progresses [segments], n alive flags [u8]    2 + 9 n
+                     n values: the robot's row of what the kind records, then
+                     of what it broadcasts (n <= 64; NaN allowed: "none")
+TeamProgress   7     count n [u16], width m [u8], n x m broadcast values         3 + 8 n m
+                     (robot-major; NaN: never heard), n ages [s] (+inf: never   + 9 n
+                     heard), n alive flags [u8]
 =============  ====  =========================================================  ==========
 
 Why a struct layout rather than msgpack or CBOR: every message is a handful of numbers
@@ -46,9 +49,10 @@ Every received message is validated by :func:`decode`: magic, schema version, ty
 declared and actual size (and at most :data:`MAX_MESSAGE_BYTES`), the run id and robot
 range when the caller gives them, every float finite and within its range (times in
 ``[0, 1e7]`` s, positions within 1e6 m, wheel speeds within 1e4 rad/s, fractions in
-``[0, 1]``). Anything else raises :class:`MessageError`, whose ``reason`` (one of
-:data:`REASONS`) a receiver counts before dropping the message; :func:`decode` raises
-nothing else, whatever the bytes.
+``[0, 1]``; NaN only where a field says "none", +inf only for a never-heard age).
+Anything else raises :class:`MessageError`, whose ``reason`` (one of :data:`REASONS`) a
+receiver counts before dropping the message; :func:`decode` raises nothing else,
+whatever the bytes.
 
 Examples
 --------
@@ -103,7 +107,7 @@ HEADER_BYTES = HEADER.size
 """Size of the header [bytes] (20)."""
 
 MAX_MESSAGE_BYTES = 16384
-"""The largest message accepted [bytes] (a team progress of 1,818 robots)."""
+"""The largest message accepted [bytes]."""
 
 MAX_SERIES = 64
 """Most values a :class:`Command` carries."""
@@ -326,8 +330,9 @@ class State(_Base):
 @dataclass(frozen=True)
 class Command(_Base):
     """Robot ``robot``'s decision at tick ``tick``: wheel-speed references [rad/s] (left,
-    right) and ``series``, the values its controller reports (at most :data:`MAX_SERIES`,
-    each finite, within 1e12, in the order of the kind's series)."""
+    right) and ``series``, its row of the values the kind records then of what it
+    broadcasts (at most :data:`MAX_SERIES`, each within 1e12 or NaN: "none", in the
+    order of the kind's series and outbox)."""
 
     t_s: float
     reference_rad_s: tuple[float, float]
@@ -344,7 +349,7 @@ class Command(_Base):
             raise MessageError(
                 "size", f"at most {MAX_SERIES} series values, got {len(self.series)}"
             )
-        _finite("series", self.series, _VALUE_MAX)
+        _finite("series", tuple(v for v in self.series if not math.isnan(v)), _VALUE_MAX)
 
     def body(self) -> bytes:
         n = len(self.series)
@@ -358,35 +363,53 @@ class Command(_Base):
 
 @dataclass(frozen=True)
 class TeamProgress(_Base):
-    """The team's progress as heard at tick ``tick``: each robot's zeta [segments] and
-    whether it is alive (its process answers)."""
+    """What the team broadcast at tick ``tick``, as the plant relays it to everyone.
 
-    progress: tuple[float, ...]
+    For each of n robots: ``width`` values (``values``, robot-major, n x width: its row
+    of the kind's broadcast, for path following its progress zeta [segments] and rate
+    [segments/s]; NaN where never heard), their age at the next tick (``age_s`` [s]:
+    one tick when fresh, more when held, +inf when never heard) and whether its process
+    is alive."""
+
+    width: int
+    values: tuple[float, ...]
+    age_s: tuple[float, ...]
     alive: tuple[bool, ...]
 
     CODE: ClassVar[int] = 7
-    BODY: ClassVar[struct.Struct] = struct.Struct("<H")
+    BODY: ClassVar[struct.Struct] = struct.Struct("<HB")
 
     def check(self) -> None:
         super().check()
-        if len(self.progress) != len(self.alive) or len(self.progress) > MAX_ROBOTS:
+        n = len(self.alive)
+        if (
+            n > MAX_ROBOTS
+            or not 0 <= self.width <= 255
+            or len(self.values) != n * self.width
+            or len(self.age_s) != n
+        ):
             raise MessageError(
                 "size",
-                f"progress and alive must have the same length <= {MAX_ROBOTS}, "
-                f"got {len(self.progress)} and {len(self.alive)}",
+                f"n = len(alive) <= {MAX_ROBOTS} robots, width in 0 .. 255, n x width values "
+                f"and n ages expected; got n = {n}, width {self.width}, "
+                f"{len(self.values)} values, {len(self.age_s)} ages",
             )
-        _finite("progress", self.progress, float(_U32))
+        _finite("values", tuple(v for v in self.values if not math.isnan(v)), _VALUE_MAX)
+        for age in self.age_s:
+            if not (age >= 0 and (age <= _T_MAX_S or age == math.inf)):
+                raise MessageError("range", f"age_s must be in [0, 1e7] or +inf, got {age}")
 
     def body(self) -> bytes:
-        n = len(self.progress)
+        n = len(self.alive)
         return (
-            self.BODY.pack(n)
-            + struct.pack(f"<{n}d", *self.progress)
+            self.BODY.pack(n, self.width)
+            + struct.pack(f"<{len(self.values)}d", *self.values)
+            + struct.pack(f"<{n}d", *self.age_s)
             + bytes(int(a) for a in self.alive)
         )
 
     def body_size(self) -> int:
-        return self.BODY.size + 9 * len(self.progress)
+        return self.BODY.size + 8 * len(self.values) + 9 * len(self.alive)
 
 
 Message = Hello | Bye | Tick | Sensors | State | Command | TeamProgress
@@ -469,12 +492,16 @@ def _body(code: int, data: bytes, run_id: int, robot: int, tick: int) -> Message
         return Command(
             *head, t_s=t, reference_rad_s=(r0, r1), series=_floats(data, Command.BODY.size, n)
         )
-    n = (len(data) - TeamProgress.BODY.size) // 9
-    progress = _floats(data, TeamProgress.BODY.size, n)
-    flags = data[TeamProgress.BODY.size + 8 * n :]
+    n, width = TeamProgress.BODY.unpack_from(data)
+    at = TeamProgress.BODY.size
+    values = _floats(data, at, n * width)
+    ages = _floats(data, at + 8 * n * width, n)
+    flags = data[at + 8 * n * width + 8 * n :]
     if any(b > 1 for b in flags):
         raise MessageError("range", "alive flags must be 0 or 1")
-    return TeamProgress(*head, progress=progress, alive=tuple(bool(b) for b in flags))
+    return TeamProgress(
+        *head, width=width, values=values, age_s=ages, alive=tuple(bool(b) for b in flags)
+    )
 
 
 def _expected_body(code: int, data: bytes) -> int:
@@ -483,11 +510,12 @@ def _expected_body(code: int, data: bytes) -> int:
     if code == Command.CODE:
         if len(data) < Command.BODY.size:
             return -1
-        return Command.BODY.size + 8 * data[Command.BODY.size - 1]
+        return Command.BODY.size + 8 * int(data[Command.BODY.size - 1])
     if code == TeamProgress.CODE:
         if len(data) < TeamProgress.BODY.size:
             return -1
-        return TeamProgress.BODY.size + 9 * int(TeamProgress.BODY.unpack_from(data)[0])
+        n, width = TeamProgress.BODY.unpack_from(data)
+        return int(TeamProgress.BODY.size + 8 * n * width + 9 * n)
     return cls.BODY.size
 
 

@@ -52,7 +52,8 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
-from firefleet.net.messages import PLANT, Bye, Command, Hello, Sensors, State, TeamProgress, Tick
+from firefleet.net.messages import MAX_SERIES, PLANT, Command, Hello, Sensors, TeamProgress, Tick
+from firefleet.net.robot import DecisionLayout, decision_layout
 from firefleet.net.transport import Counters, Keys, free_port, open_session, robot_of_key
 from firefleet.scenarios.schema import Scenario
 from firefleet.sim.drive import DriveState, discretise_drive, drive_init, encoder_phase
@@ -166,7 +167,6 @@ class _Exchange:
         self.alive: set[int] = set()
         self.dead: set[int] = set()
         self.commands: dict[int, Command] = {}
-        self.progress = np.zeros(run.n_robots)
         self.late = 0
         self.tick = 0
         self.stopping = False
@@ -186,10 +186,6 @@ class _Exchange:
                     self.commands[msg.robot] = msg
                 else:
                     self.late += 1
-            elif isinstance(msg, State):
-                self.progress[msg.robot] = msg.segment + msg.fraction
-            elif isinstance(msg, Bye):
-                pass
             self.cond.notify_all()
 
     def on_token(self, sample: Any) -> None:
@@ -208,14 +204,6 @@ class _Exchange:
                 self.dead.add(robot)
                 self.run.failed[robot] = {"tick": float(self.tick), "noticed_s": time.monotonic()}
             self.cond.notify_all()
-
-
-def _series_shapes(scenario: Scenario, decider: Decider) -> list[tuple[str, tuple[int, ...]]]:
-    """Each series' shape per robot, from the decision at tick 0 on the start poses."""
-    state, params = decider.init(scenario)
-    pose = scenario.initial_poses.copy() if decider.uses_estimate else None
-    _, command = decider.decide(state, DecideInputs(0.0, 0, pose, {}, {}), params, scenario.dt_s)
-    return [(name, np.shape(command.series[name])[1:]) for name in decider.series]
 
 
 def _spawn(
@@ -282,7 +270,9 @@ def run_team(
     Raises
     ------
     InputError
-        For a kind without a decision on the world loop, a team over :data:`MAX_TEAM`,
+        For a kind without a decision on the world loop (or one whose command would carry
+        more than :data:`~firefleet.net.messages.MAX_SERIES` values), a team over
+        :data:`MAX_TEAM`,
         an unknown clock, or robot processes that do not start.
     """
     kind = task_kind(scenario.command.kind)
@@ -298,7 +288,13 @@ def run_team(
             f"poses: a team run starts one process per robot, at most {MAX_TEAM}; got {n}"
         )
     decider = kind.decider
-    shapes = _series_shapes(scenario, decider)
+    layout = decision_layout(scenario, decider)
+    if layout.series_size + layout.width > MAX_SERIES:
+        raise InputError(
+            f"command.kind: {kind.name!r} records and broadcasts "
+            f"{layout.series_size + layout.width} values per robot a tick; a command "
+            f"carries at most {MAX_SERIES}"
+        )
     run = TeamRun(run_id=secrets.randbits(64), clock=clock, n_robots=n, misses=[0] * n)
     keys = Keys(run.run_id)
     ex = _Exchange(run)
@@ -339,7 +335,7 @@ def run_team(
             result = _plant(
                 scenario,
                 decider,
-                shapes,
+                layout,
                 rec_steps,
                 run,
                 ex,
@@ -394,7 +390,7 @@ def run_team(
 def _plant(
     scenario: Scenario,
     decider: Decider,
-    shapes: list[tuple[str, tuple[int, ...]]],
+    layout: DecisionLayout,
     rec_steps: Any,
     run: TeamRun,
     ex: _Exchange,
@@ -414,15 +410,17 @@ def _plant(
         scenario.robot, scenario.motor, scenario.speed_pid, scenario.encoder, scenario.dt_s
     )
     drive = drive_init(scenario.initial_poses, phase, stack)
-    sizes = [int(np.prod(shape)) for _, shape in shapes]
-    offsets = np.cumsum([0, *sizes])
     last_ref = np.zeros((n, 2))
-    last_series = np.full((n, int(offsets[-1])), np.nan)
+    size = layout.series_size
+    last_values = np.full((n, size + layout.width), np.nan)  # series, then broadcast
+    heard_tick = np.full(n, -1)  # the tick of each robot's last command (-1: never)
     pubs = [
         session.declare_publisher(keys.sensors(i), congestion_control=zenoh.CongestionControl.BLOCK)
         for i in range(n)
     ]
-    pub_progress = session.declare_publisher(keys.progress)
+    pub_progress = session.declare_publisher(
+        keys.progress, congestion_control=zenoh.CongestionControl.BLOCK
+    )
     dt = scenario.dt_s
     t0 = time.monotonic()
 
@@ -466,25 +464,35 @@ def _plant(
                 run.misses[i] += 1
             for i, cmd in ex.commands.items():
                 last_ref[i] = cmd.reference_rad_s
-                if len(cmd.series) == last_series.shape[1]:
-                    last_series[i] = cmd.series
+                if len(cmd.series) == last_values.shape[1]:
+                    last_values[i] = cmd.series
+                    heard_tick[i] = k
             for i in ex.dead:
                 last_ref[i] = 0.0
-            alive = tuple(i not in ex.dead for i in range(n))
+            # the broadcast as the robots will hold it at the next tick (one tick old
+            # when fresh), relayed before that tick's sensors
+            age = np.where(heard_tick >= 0, (k + 1 - heard_tick) * dt, np.inf)
             team = TeamProgress(
-                run.run_id, PLANT, k, progress=tuple(float(p) for p in ex.progress), alive=alive
+                run.run_id,
+                PLANT,
+                k,
+                width=layout.width,
+                values=tuple(float(v) for v in last_values[:, size:].ravel()),
+                age_s=tuple(float(a) for a in age),
+                alive=tuple(i not in ex.dead for i in range(n)),
             )
             payload = run.counters.send(team)
         pub_progress.put(payload)
-        series = {
-            name: last_series[:, offsets[j] : offsets[j + 1]].reshape((n, *shape))
-            for j, (name, shape) in enumerate(shapes)
-        }
+        series = layout.split(last_values[:, :size], "series")
         run.ticks = k + 1
         return None, WheelCommand(reference_rad_s=last_ref.copy(), series=series)
 
     stages = Stages(
-        world=StaticWorld(torque_n_m=scenario.load.torque_n_m, start_s=scenario.load.start_s),
+        world=StaticWorld(  # the world of the in-process loop, its motor faults included
+            torque_n_m=scenario.load.torque_n_m,
+            start_s=scenario.load.start_s,
+            faults=scenario.faults,
+        ),
         sensors=_NetSensors(),
         estimation=NoEstimation(),
     )
