@@ -21,6 +21,7 @@ from firefleet.cli._console import (
     metrics_table,
     progress_bar,
 )
+from firefleet.cli._serve import add_run_flags, live_mode, mcap_of
 from firefleet.errors import InputError
 from firefleet.outputs import json_text, run_record, staged_dir
 from firefleet.scenarios.registry import builtin_names, load_scenario
@@ -43,6 +44,7 @@ def add_parsers(sub: Any) -> None:
     run.add_argument(
         "--no-plots", action="store_true", help="skip the PNG figures (default: draw them)"
     )
+    add_run_flags(run)
     run.set_defaults(handler=cmd_run)
     validate = sub.add_parser("validate", help="check scenario files, naming each error")
     validate.add_argument("files", nargs="+", metavar="FILE")
@@ -70,14 +72,18 @@ def run_into(
     plots: bool,
     err: Console,
     command_line: Sequence[str],
+    mcap: bool = False,
+    simulator: Any = None,
 ) -> tuple[dict[str, Any], tuple[str, ...]]:
     """Run a scenario and write its outputs into ``folder``; returns (metrics doc, figures).
 
     ``metrics.json`` also names what made the run (``provenance``: firefleet's version,
     the git commit, the seed and ``command_line``); the returned document does not.
+    ``mcap``: also write ``run.mcap``; ``simulator``: runs the scenario instead of
+    :func:`simulate` (``simulator(scenario, progress)``, the live mode).
     """
     with progress_bar(err, scenario.name) as progress:
-        result = simulate(scenario, progress=progress)
+        result = (simulator or simulate)(scenario, progress=progress)
     metrics = compute_metrics(result)
     document = metrics_document(scenario.name, scenario.claims, metrics)
     folder.mkdir(parents=True, exist_ok=True)
@@ -85,6 +91,8 @@ def run_into(
     written = {"scenario": document["scenario"], "provenance": provenance, **document}
     (folder / "metrics.json").write_text(json_text(written), encoding="utf-8")
     (folder / "result.npz").write_bytes(result.to_npz_bytes())
+    if mcap:
+        (folder / "run.mcap").write_bytes(mcap_of(result, written))
     names: tuple[str, ...] = ()
     if plots:
         from firefleet.report.plots import figures  # matplotlib only when plotting
@@ -117,9 +125,15 @@ def cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
         scenario = dataclasses.replace(scenario, seed=args.seed)
     dest = Path(args.out) if args.out else Path("runs") / scenario.name
     record = run_record(args.command_line, seed=scenario.seed)
-    with staged_dir(dest, record=record) as stage:
+    with live_mode(args, out) as simulator, staged_dir(dest, record=record) as stage:
         document, _ = run_into(
-            scenario, stage, plots=not args.no_plots, err=err, command_line=args.command_line
+            scenario,
+            stage,
+            plots=not args.no_plots,
+            err=err,
+            command_line=args.command_line,
+            mcap=args.mcap,
+            simulator=simulator,
         )
     out.print(metrics_table(document))
     out.print(f"wrote {dest}/")
