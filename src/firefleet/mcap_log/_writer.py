@@ -157,7 +157,10 @@ def mcap_bytes(
                 ]
         signal_channel = (
             foxglove.Channel(
-                "/signals", schema={"type": "object"}, message_encoding="json", context=context
+                "/signals",
+                schema={"type": "object", "title": "firefleet.Signals"},
+                message_encoding="json",
+                context=context,
             )
             if signals
             else None
