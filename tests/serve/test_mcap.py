@@ -40,6 +40,7 @@ def test_coop_mcap_has_the_channels_schemas_counts_and_times(coop: Path) -> None
     reader = make_reader(io.BytesIO((coop / "run.mcap").read_bytes()))
     summary = reader.get_summary()
     assert summary is not None
+    assert summary.statistics is not None
     schema_of = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
     n_samples = t.size
     expected = {"/tf": ("foxglove.FrameTransforms", n_samples)}
@@ -118,6 +119,7 @@ def test_sensor_arrays_become_grid_scans_images_and_layers() -> None:
     arrays = synthetic_run()
     summary = make_reader(io.BytesIO(mcap_bytes(arrays))).get_summary()
     assert summary is not None
+    assert summary.statistics is not None
     schema_of = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
     counts = Counter(
         {summary.channels[c].topic: k for c, k in summary.statistics.channel_message_counts.items()}

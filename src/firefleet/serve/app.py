@@ -174,12 +174,20 @@ def create_app(
         await websocket.accept()
         await websocket.send_text(hub.hello())
         seq = 0
+        closed = asyncio.ensure_future(websocket.receive())  # the page says nothing but bye
         try:
             while True:
-                seq, text = await hub.frames(seq)
+                newer = asyncio.ensure_future(hub.frames(seq))
+                await asyncio.wait({newer, closed}, return_when=asyncio.FIRST_COMPLETED)
+                if closed.done():
+                    newer.cancel()
+                    return
+                seq, text = newer.result()
                 await websocket.send_text(text)
         except (WebSocketDisconnect, RuntimeError):
             return
+        finally:
+            closed.cancel()
 
     async def not_found(request: Request, exc: Exception) -> Response:
         status = exc.status_code if isinstance(exc, HTTPException) else 500

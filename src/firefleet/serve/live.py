@@ -151,7 +151,7 @@ class LiveTap:
                 if ahead > 0:
                     time.sleep(ahead)
                     now = time.perf_counter()
-            if now - pace.last >= 1.0 / self.fps or k == self.n_steps:
+            if now - pace.last >= 1.0 / self.fps and k < self.n_steps:  # the last: at the end
                 pace.last = now
                 pose = np.round(drive.pose, 4).tolist()
                 self.hub.publish(
