@@ -4,16 +4,20 @@ from __future__ import annotations
 
 import asyncio
 import json
+import socket
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
+import pytest
 from websockets.sync.client import connect
 
-from firefleet import simulate
+from firefleet import load_scenario, simulate
+from firefleet.cli._main import main
 from firefleet.serve.app import create_app
 from firefleet.serve.live import LiveHub, simulate_live
-from tests.serve.conftest import Served, short
+from tests.serve.conftest import Served, free_port, short
 
 
 def test_a_slow_reader_gets_the_newest_frame_and_the_rest_are_dropped() -> None:
@@ -90,3 +94,36 @@ def test_a_websocket_receives_frames_while_the_run_simulates() -> None:
     assert times[-1] == 10.0
     assert sum(bool(m["while_running"]) for m in received) >= 10
     assert len({round(t, 3) for t in times}) == len(times)
+
+
+def test_run_live_from_the_command_line_writes_the_run_and_frees_the_port(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    port = free_port()
+    out = tmp_path / "live"
+    argv = ["run", "path-straight", "--live", "--live-speed", "0", "--serve-port", str(port)]
+    assert main([*argv, "--no-plots", "--out", str(out)]) == 0
+    assert f"live: http://127.0.0.1:{port}/live" in capsys.readouterr().out
+    reference = simulate(load_scenario("path-straight"), backend="array")
+    with np.load(out / "result.npz") as z:
+        np.testing.assert_array_equal(z["pose"], reference.pose)
+    with socket.socket() as s:  # the live server has let go of its port
+        s.bind(("127.0.0.1", port))
+
+
+@pytest.mark.parametrize(
+    ("flags", "said"),
+    [
+        (["--serve-port", "70000"], "--serve-port must be 1..65535, got 70000"),
+        (["--live-speed", "-1"], "--live-speed must be >= 0 (0: as fast as it runs), got -1.0"),
+    ],
+)
+def test_bad_live_flags_are_one_line_and_exit_2(
+    flags: list[str], said: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["run", "motor-pid", "--live", *flags, "--out", str(tmp_path / "x")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert said in err
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x").exists()

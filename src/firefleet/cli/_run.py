@@ -21,7 +21,7 @@ from firefleet.cli._console import (
     metrics_table,
     progress_bar,
 )
-from firefleet.cli._serve import add_run_flags, live_mode, mcap_of
+from firefleet.cli._serve import add_run_flags, dashboard_screenshot, live_mode, mcap_of
 from firefleet.errors import InputError
 from firefleet.outputs import json_text, run_record, staged_dir
 from firefleet.scenarios.registry import builtin_names, load_scenario
@@ -189,7 +189,14 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
         missing = _section_27(stage, entries, args, out, err)
         seeds = {s.name: s.seed for s in scenarios}
         footer = report_footer(record, seeds)
-        index = render_index(entries, version=firefleet.__version__, footer=footer, missing=missing)
+        (stage / "dashboard.png").write_bytes(dashboard_screenshot())
+        index = render_index(
+            entries,
+            version=firefleet.__version__,
+            footer=footer,
+            missing=missing,
+            dashboard="dashboard.png",
+        )
         (stage / "index.html").write_text(index, encoding="utf-8")
     total = sum(len(e.document["claims"]) for e in entries)
     passed = sum(c["passed"] for e in entries for c in e.document["claims"])

@@ -20,6 +20,7 @@ __all__ = [
     "add_parsers",
     "add_run_flags",
     "check_port",
+    "dashboard_screenshot",
     "live_mode",
     "mcap_of",
     "serve_forever",
@@ -100,6 +101,13 @@ def cmd_serve(args: argparse.Namespace, out: Console, err: Console) -> int:
     out.print("press Ctrl-C to stop", markup=False)
     serve_forever(app, args.host, args.port)
     return EXIT_OK
+
+
+def dashboard_screenshot() -> bytes:
+    """The PNG of a run page that the report's front page shows (``static/``)."""
+    from importlib import resources
+
+    return (resources.files("firefleet.serve") / "static" / "dashboard-run.png").read_bytes()
 
 
 def add_run_flags(run: argparse.ArgumentParser) -> None:
