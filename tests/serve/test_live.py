@@ -101,10 +101,10 @@ def test_run_live_from_the_command_line_writes_the_run_and_frees_the_port(
 ) -> None:
     port = free_port()
     out = tmp_path / "live"
-    argv = ["run", "path-straight", "--live", "--live-speed", "0", "--serve-port", str(port)]
+    argv = ["run", "motor-pid", "--live", "--live-speed", "0", "--serve-port", str(port)]
     assert main([*argv, "--no-plots", "--out", str(out)]) == 0
     assert f"live: http://127.0.0.1:{port}/live" in capsys.readouterr().out
-    reference = simulate(load_scenario("path-straight"), backend="array")
+    reference = simulate(load_scenario("motor-pid"), backend="array")
     with np.load(out / "result.npz") as z:
         np.testing.assert_array_equal(z["pose"], reference.pose)
     with socket.socket() as s:  # the live server has let go of its port

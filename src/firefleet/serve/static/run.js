@@ -35,9 +35,9 @@
   if (doc.map) layers.push(["map", "map"]);
   const box = document.getElementById("layers");
   for (const layer of layers) {
-    state.on[layer[0]] = true;
+    state.on[layer[0]] = !(layer[0] === "labels" && n > 20);  // 200 numbers hide the team
     const label = document.createElement("label"), input = document.createElement("input");
-    input.type = "checkbox"; input.checked = true; input.dataset.layer = layer[0];
+    input.type = "checkbox"; input.checked = state.on[layer[0]]; input.dataset.layer = layer[0];
     input.addEventListener("change", function () { state.on[layer[0]] = input.checked; draw(); });
     label.appendChild(input); label.appendChild(document.createTextNode(" " + layer[1]));
     box.appendChild(label);
