@@ -3,7 +3,8 @@
 ::
 
     firefleet list
-    firefleet run SCENARIO [--out DIR] [--seed N] [--no-plots]
+    firefleet run SCENARIO [--out DIR] [--seed N] [--no-plots] [--mcap]
+                  [--live [--serve-port N] [--live-speed X]]
     firefleet validate FILE...
     firefleet reproduce [--out DIR]
     firefleet stereo LEFT RIGHT [--calib FILE | --uncalibrated | --rectified] [--out DIR]

@@ -95,6 +95,8 @@ def cmd_serve(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     check_port(args.port)
     token, loopback_only = access(args.host, args.token)
+    if not args.folders and not Path("runs").is_dir():
+        raise InputError("RUN_DIR: none given and no runs/ folder here; name the run folders")
     runs = find_runs([Path(f) for f in args.folders or ["runs"]])
     app = create_app(runs, token=token, loopback_only=loopback_only)
     out.print(f"serving {len(runs)} run(s) at {url_of(args.host, args.port, token)}", markup=False)
