@@ -225,3 +225,58 @@ def test_the_token_is_required_beyond_loopback(page: Any, runs_root: Path) -> No
         assert page.locator("#claims tbody tr").count() > 0
     finally:
         server.stop()
+
+
+def test_sensor_layers_are_drawn_map_rays_thermal(page: Any, tmp_path: Path) -> None:
+    from tests.serve.test_mcap import synthetic_run
+
+    folder = tmp_path / "sensors"
+    folder.mkdir()
+    arrays = synthetic_run()
+    np.savez_compressed(folder / "result.npz", **arrays)  # type: ignore[arg-type]
+    (folder / "metrics.json").write_text(json.dumps({"scenario": "sensors", "claims": []}))
+    server = Served(create_app(find_runs([folder])))
+    try:
+        open_run(page, server.url, "sensors")
+        layers = page.locator("#layers input").evaluate_all("bs => bs.map(b => b.dataset.layer)")
+        assert {"map", "ranges", "particles", "landmarks", "estimate:estimated_pose"} <= set(layers)
+        set_slider(page, "max")
+        shoot(page, "dashboard-sensors.png")
+        assert page.locator("#thermal-panel").is_visible()
+        image = page.evaluate(
+            """() => { const c = document.getElementById('thermal');
+                 const data = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+                 return [c.width, c.height, Array.from(data)]; }"""
+        )
+        width, height, rgba = image
+        thermal = np.asarray(rgba).reshape(height, width, 4)[..., :3]
+        frame = arrays["thermal_c"][-1, 0]  # robot 1's frame at the slider's end
+        assert (width, height) == (8, 6)
+        hot, cold = (
+            np.unravel_index(frame.argmax(), frame.shape),
+            np.unravel_index(frame.argmin(), frame.shape),
+        )
+        assert thermal[hot].tolist() == [255, 255, 255]  # the hottest cell white
+        assert thermal[cold].tolist() == [0, 0, 0]  # the coldest black
+        page.evaluate(  # the map alone
+            """() => { for (const box of document.querySelectorAll('#layers input')) {
+                 if (box.dataset.layer !== 'map' && box.checked) box.click(); } }"""
+        )
+        view = page.evaluate("() => window.firefleet.view")
+        pixels = canvas_pixels(page)
+
+        def px(x: float, y: float) -> tuple[int, int]:
+            return (
+                round(view["oy"] + (view["ymax"] - y) * view["scale"]),
+                round(view["ox"] + (x - view["xmin"]) * view["scale"]),
+            )
+
+        # the map's top row (occupied) spans y = -2 + 40 * 0.1 = 2.0 m .. 1.9 m: black
+        row, col = px(2.45, 1.95)  # (between the 1 m grid lines)
+        assert pixels[row, col].max() < 60
+        row, col = px(2.45, 1.45)  # a free cell: white
+        assert pixels[row, col].min() > 200
+        row, col = px(-1.5, 1.95)  # left of the map's origin: no map
+        assert pixels[row, col].min() > 200
+    finally:
+        server.stop()
