@@ -148,7 +148,7 @@ FF.drawScene = function (ctx, view, doc, k, on) {
   FF.grid(ctx, view);
   const scene = doc.scene || {};
   const n = doc.pose.length ? doc.pose[0].length : 0;
-  if (on.paths) scene.paths.forEach(function (path, i) { FF.line(ctx, view, path, FF.color(i), 1.5, [6, 4]); });
+  if (on.paths) (scene.paths || []).forEach(function (path, i) { FF.line(ctx, view, path, FF.color(i), 1.5, [6, 4]); });
   if (on.obstacles) for (const o of scene.obstacles || []) FF.circle(ctx, view, o[0], o[1], o[2], "#555", "rgba(90,90,90,0.35)");
   ctx.save();
   ctx.globalAlpha = 0.5;
