@@ -3,7 +3,8 @@
 ::
 
     firefleet list
-    firefleet run SCENARIO [--out DIR] [--seed N] [--no-plots]
+    firefleet run SCENARIO [--out DIR] [--seed N] [--no-plots] [--mcap]
+                  [--live [--serve-port N] [--live-speed X]]
     firefleet validate FILE...
     firefleet reproduce [--out DIR] [--seeds A:B]
     firefleet sweep SCENARIO [--seeds A:B] [--set KEY=V1,V2,...]... [--zip]
@@ -17,6 +18,7 @@
     firefleet slam LOG [--particles P] [--seed N] [--out DIR] [--fastslam {1,2}]
                    [--association {known,unknown}] [--odometry-noise-scale S]
                    [--heading-drift-sigma RAD_PER_M] [--turn-scale-sigma S] [--no-plots]
+    firefleet serve [RUN_DIR ...] [--host 127.0.0.1] [--port 8000] [--token T]
 
 Bad input (an unknown scenario, a malformed file, a bad value) is one line per problem
 on stderr and exit status 2, with nothing written. A run whose claims do not all hold
@@ -33,7 +35,7 @@ from typing import NoReturn
 from rich.console import Console
 
 import firefleet
-from firefleet.cli import _fis, _run, _slam, _stereo, _sweep, _team, _thermal
+from firefleet.cli import _fis, _run, _serve, _slam, _stereo, _sweep, _team, _thermal
 from firefleet.cli._console import EXIT_BAD_INPUT, EXIT_OK
 from firefleet.errors import InputError
 
@@ -58,7 +60,16 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"firefleet {firefleet.__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for group in (_run, _sweep, _stereo, _fis, _thermal, _slam, _team):  # the order of the help
+    for group in (
+        _run,
+        _sweep,
+        _stereo,
+        _fis,
+        _thermal,
+        _slam,
+        _team,
+        _serve,
+    ):  # the order of the help
         group.add_parsers(sub)
     for command in sub.choices.values():
         _say_defaults(command)

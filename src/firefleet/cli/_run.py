@@ -21,6 +21,7 @@ from firefleet.cli._console import (
     metrics_table,
     progress_bar,
 )
+from firefleet.cli._serve import add_run_flags, dashboard_screenshot, live_mode, mcap_of
 from firefleet.errors import InputError
 from firefleet.outputs import json_text, run_record, staged_dir
 from firefleet.scenarios.registry import builtin_names, load_scenario
@@ -43,6 +44,7 @@ def add_parsers(sub: Any) -> None:
     run.add_argument(
         "--no-plots", action="store_true", help="skip the PNG figures (default: draw them)"
     )
+    add_run_flags(run)
     run.set_defaults(handler=cmd_run)
     validate = sub.add_parser("validate", help="check scenario files, naming each error")
     validate.add_argument("files", nargs="+", metavar="FILE")
@@ -76,14 +78,18 @@ def run_into(
     plots: bool,
     err: Console,
     command_line: Sequence[str],
+    mcap: bool = False,
+    simulator: Any = None,
 ) -> tuple[dict[str, Any], tuple[str, ...]]:
     """Run a scenario and write its outputs into ``folder``; returns (metrics doc, figures).
 
     ``metrics.json`` also names what made the run (``provenance``: firefleet's version,
     the git commit, the seed and ``command_line``); the returned document does not.
+    ``mcap``: also write ``run.mcap``; ``simulator``: runs the scenario instead of
+    :func:`simulate` (``simulator(scenario, progress)``, the live mode).
     """
     with progress_bar(err, scenario.name) as progress:
-        result = simulate(scenario, progress=progress)
+        result = (simulator or simulate)(scenario, progress=progress)
     metrics = compute_metrics(result)
     document = metrics_document(scenario.name, scenario.claims, metrics)
     folder.mkdir(parents=True, exist_ok=True)
@@ -91,6 +97,8 @@ def run_into(
     written = {"scenario": document["scenario"], "provenance": provenance, **document}
     (folder / "metrics.json").write_text(json_text(written), encoding="utf-8")
     (folder / "result.npz").write_bytes(result.to_npz_bytes())
+    if mcap:
+        (folder / "run.mcap").write_bytes(mcap_of(result, written))
     names: tuple[str, ...] = ()
     if plots:
         from firefleet.report.plots import figures  # matplotlib only when plotting
@@ -123,9 +131,15 @@ def cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
         scenario = dataclasses.replace(scenario, seed=args.seed)
     dest = Path(args.out) if args.out else Path("runs") / scenario.name
     record = run_record(args.command_line, seed=scenario.seed)
-    with staged_dir(dest, record=record) as stage:
+    with live_mode(args, out) as simulator, staged_dir(dest, record=record) as stage:
         document, _ = run_into(
-            scenario, stage, plots=not args.no_plots, err=err, command_line=args.command_line
+            scenario,
+            stage,
+            plots=not args.no_plots,
+            err=err,
+            command_line=args.command_line,
+            mcap=args.mcap,
+            simulator=simulator,
         )
     out.print(metrics_table(document))
     out.print(f"wrote {dest}/")
@@ -190,7 +204,14 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
         missing = _section_27(stage, entries, args, out, err)
         _section_25(stage, entries, out, err)
         footer = report_footer(record, {s.name: s.seed for s in scenarios})
-        index = render_index(entries, version=firefleet.__version__, footer=footer, missing=missing)
+        (stage / "dashboard.png").write_bytes(dashboard_screenshot())
+        index = render_index(
+            entries,
+            version=firefleet.__version__,
+            footer=footer,
+            missing=missing,
+            dashboard="dashboard.png",
+        )
         (stage / "index.html").write_text(index, encoding="utf-8")
     total = sum(len(e.document["claims"]) for e in entries)
     passed = sum(c["passed"] for e in entries for c in e.document["claims"])

@@ -319,7 +319,12 @@ def _order(entries: Sequence[ReportEntry]) -> list[tuple[str, str, list[ReportEn
 
 
 def render_index(
-    entries: Sequence[ReportEntry], *, version: str, footer: str = "", missing: str = ""
+    entries: Sequence[ReportEntry],
+    *,
+    version: str,
+    footer: str = "",
+    missing: str = "",
+    dashboard: str = "",
 ) -> str:
     """The report's ``index.html``.
 
@@ -334,6 +339,9 @@ def render_index(
         More provenance for the footer (commit, command line), plain text.
     missing : str
         Plain text saying what could not be run (data absent), shown under the summary.
+    dashboard : str
+        A screenshot of the dashboard (its file name beside ``index.html``), shown under
+        the summary with the command that opens these runs in it; "" for none.
     """
     esc = html.escape
     total = sum(len(e.document.get("claims", [])) for e in entries)
@@ -358,6 +366,12 @@ def render_index(
     stamp = dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
     missing_html = f"<p class=small>{esc(missing)}</p>" if missing else ""
     more = f" {esc(footer)}" if footer else ""
+    if dashboard:
+        missing_html += (
+            f'<p><img src="{esc(dashboard)}" alt="a run in firefleet\'s dashboard"><br>'
+            "<span class=small>Every run of this report in a browser, replayed to scale with "
+            "its signals and claims: <code>firefleet serve</code> on this folder.</span></p>"
+        )
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
