@@ -19,6 +19,7 @@
                    [--association {known,unknown}] [--odometry-noise-scale S]
                    [--heading-drift-sigma RAD_PER_M] [--turn-scale-sigma S] [--no-plots]
     firefleet serve [RUN_DIR ...] [--host 127.0.0.1] [--port 8000] [--token T]
+    firefleet robot CONFIG [--fake] [--out DIR]
 
 Bad input (an unknown scenario, a malformed file, a bad value) is one line per problem
 on stderr and exit status 2, with nothing written. A run whose claims do not all hold
@@ -35,7 +36,7 @@ from typing import NoReturn
 from rich.console import Console
 
 import firefleet
-from firefleet.cli import _fis, _run, _serve, _slam, _stereo, _sweep, _team, _thermal
+from firefleet.cli import _fis, _robot, _run, _serve, _slam, _stereo, _sweep, _team, _thermal
 from firefleet.cli._console import EXIT_BAD_INPUT, EXIT_OK
 from firefleet.errors import InputError
 
@@ -69,6 +70,7 @@ def _parser() -> argparse.ArgumentParser:
         _slam,
         _team,
         _serve,
+        _robot,
     ):  # the order of the help
         group.add_parsers(sub)
     for command in sub.choices.values():

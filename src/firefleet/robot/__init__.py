@@ -5,6 +5,12 @@ The bytes on the wire are described once, in ``firmware/arduino/PROTOCOL.md``.
 """
 
 from firefleet.robot._arduino import ArduinoLink
+from firefleet.robot._config import (
+    HardwareConfig,
+    RobotConfig,
+    parse_robot_config,
+    read_robot_config,
+)
 from firefleet.robot._fake_board import BoardLog, FakeBoard
 from firefleet.robot._frames import MAX_PAYLOAD, SYNC, Frame, FrameDecoder, crc16, encode_frame
 from firefleet.robot._lepton import FakeLepton, Lepton, LinuxI2c
@@ -27,11 +33,19 @@ from firefleet.robot._pt100 import (
     cvd_resistance_ohm,
     cvd_temperature_c,
 )
+from firefleet.robot._runtime import (
+    Adapters,
+    OnboardResult,
+    load_role,
+    open_adapters,
+    run_onboard,
+)
 
 __all__ = [
     "LENGTHS",
     "MAX_PAYLOAD",
     "SYNC",
+    "Adapters",
     "ArduinoLink",
     "BoardLog",
     "EStop",
@@ -42,18 +56,26 @@ __all__ = [
     "FakeMax31865",
     "Frame",
     "FrameDecoder",
+    "HardwareConfig",
     "Lepton",
     "LinuxI2c",
     "Message",
+    "OnboardResult",
     "Pt100",
     "Pt100Reading",
     "Pwm",
+    "RobotConfig",
     "Setpoint",
     "Status",
     "crc16",
     "cvd_resistance_ohm",
     "cvd_temperature_c",
     "encode_frame",
+    "load_role",
+    "open_adapters",
     "pack",
+    "parse_robot_config",
+    "read_robot_config",
+    "run_onboard",
     "unpack",
 ]

@@ -1,0 +1,282 @@
+"""The on-board loop: the robot's controllers on its hardware, at their rates.
+
+Each control period (the scenario's, 10 ms) on a monotonic clock:
+
+1. the motor board's newest encoder counts (:class:`~firefleet.robot.ArduinoLink`);
+2. the robot's controller stack, the same object a team run's robot process holds
+   (:class:`firefleet.net.robot.RobotController`: odometry from the counts, then the
+   task kind's decision, e.g. the deliverable's fuzzy path follower) -> wheel-speed
+   references;
+3. the references, limited to what the motors can do at the supply voltage (the Table 2
+   motor's no-load speed), sent as a SETPOINT (the PID runs on the Arduino);
+4. every ``1 / rate_hz``: a thermal frame through :func:`firefleet.perception.thermal.detect`
+   (fires, people) and a PT100 reading.
+
+A period that ends after its deadline is an *overrun*: the loop does not try to catch
+up (the next period starts now), counts it, and after ``overrun_streak`` overruns in a
+row e-stops the motors and ends (exit 1): a controller that cannot keep its period
+does not drive. The loop also ends on the scenario's duration, when the robot arrives,
+or on SIGINT/SIGTERM (the CLI sets the stop event); in every case the motors are
+commanded to zero and e-stopped, and the ports closed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from firefleet.errors import InputError
+from firefleet.net.messages import Sensors
+from firefleet.net.robot import RobotController
+from firefleet.perception.thermal import KELVIN, detect
+from firefleet.robot._arduino import ArduinoLink
+from firefleet.robot._config import RobotConfig
+from firefleet.robot._fake_board import FakeBoard
+from firefleet.robot._lepton import FakeLepton, Lepton
+from firefleet.robot._messages import EStop, Setpoint
+from firefleet.robot._pt100 import FakeMax31865, Pt100
+from firefleet.scenarios.registry import load_scenario
+from firefleet.scenarios.schema import Scenario
+
+__all__ = ["Adapters", "OnboardResult", "load_role", "open_adapters", "run_onboard"]
+
+
+@dataclass
+class Adapters:
+    """The devices the loop drives (None: not fitted)."""
+
+    motors: ArduinoLink
+    thermal: Lepton | None = None
+    pt100: Pt100 | None = None
+    board: FakeBoard | None = None
+
+
+def _fake_scene(frames: int = 9) -> np.ndarray:
+    """Lepton frames (centikelvin) of a 21 deg C room with a person walking across."""
+    out = np.full((frames, 60, 80), round((21.0 + KELVIN) * 100), dtype=np.uint16)
+    for k in range(frames):
+        c = 10 + 6 * k
+        out[k, 22:50, c : c + 8] = round((34.0 + KELVIN) * 100)
+    return out
+
+
+@contextlib.contextmanager
+def open_adapters(config: RobotConfig, *, fake: bool) -> Iterator[Adapters]:
+    """Open the configured devices (``fake``: every device replaced by its fake), and
+    close them at the end, motors stopped first."""
+    hw = config.hardware
+    with contextlib.ExitStack() as stack:
+        board = None
+        if fake or hw.motors.adapter == "fake":
+            board = stack.enter_context(FakeBoard())
+            port = board.port
+        else:
+            port = hw.motors.port
+        motors = stack.enter_context(ArduinoLink(port, baud=hw.motors.baud))
+        thermal = None
+        if hw.thermal.adapter == "fake" or (fake and hw.thermal.adapter != "none"):
+            camera = FakeLepton(_fake_scene(), lepton=2)
+            thermal = Lepton(camera, cci=camera, lepton=2)
+        elif hw.thermal.adapter == "lepton":
+            thermal = _real_lepton(config, stack)
+        pt100 = None
+        if hw.pt100.adapter == "fake" or (fake and hw.pt100.adapter != "none"):
+            pt100 = Pt100(FakeMax31865(temperature_c=23.5), wires=hw.pt100.wires)
+        elif hw.pt100.adapter == "max31865":
+            pt100 = Pt100(
+                _spi(hw.pt100.spi_bus, hw.pt100.spi_device, 1, 1_000_000, stack),
+                wires=hw.pt100.wires,
+                mains_hz=hw.pt100.mains_hz,
+            )
+        yield Adapters(motors=motors, thermal=thermal, pt100=pt100, board=board)
+
+
+def _spi(bus: int, device: int, mode: int, hz: int, stack: contextlib.ExitStack) -> Any:
+    try:
+        import spidev
+    except ImportError as error:
+        raise InputError("SPI devices need spidev: pip install spidev==3.8") from error
+    spi = spidev.SpiDev()
+    try:
+        spi.open(bus, device)
+    except OSError as error:
+        raise InputError(f"cannot open SPI bus {bus} device {device}: {error}") from error
+    spi.mode = mode
+    spi.max_speed_hz = hz
+    stack.callback(spi.close)
+    return spi
+
+
+def _real_lepton(config: RobotConfig, stack: contextlib.ExitStack) -> Lepton:
+    from firefleet.robot._lepton import LinuxI2c
+
+    t = config.hardware.thermal
+    spi = _spi(t.spi_bus, t.spi_device, 3, 18_000_000, stack)
+    try:
+        cci = LinuxI2c(t.i2c_bus)
+    except OSError as error:
+        raise InputError(f"cannot open I2C bus {t.i2c_bus}: {error}") from error
+    stack.callback(cci.close)
+    return Lepton(spi, cci=cci, lepton=t.lepton)
+
+
+@dataclass
+class OnboardResult:
+    """What the loop did.
+
+    Attributes
+    ----------
+    stop_reason : str
+        ``duration``, ``arrived``, ``signal`` or ``overruns``.
+    ticks, overruns, worst_overrun_streak : int
+    period_s : list of float
+        The measured period of every tick [s].
+    cpu_s, wall_s : float
+        Process CPU time and wall time of the loop [s].
+    t_s, counts, reference_rad_s, pose : list
+        The log: time [s], encoder counts (right, left), references sent [rad/s], the
+        pose estimate (x, y, theta).
+    thermal : list of dict
+        Per thermal frame: time, fires, people, hottest pixel [deg C].
+    pt100_c : list of tuple
+        (time [s], air temperature [deg C]) per reading.
+    """
+
+    stop_reason: str = "duration"
+    ticks: int = 0
+    overruns: int = 0
+    worst_overrun_streak: int = 0
+    period_s: list[float] = field(default_factory=list)
+    cpu_s: float = 0.0
+    wall_s: float = 0.0
+    t_s: list[float] = field(default_factory=list)
+    counts: list[tuple[int, int]] = field(default_factory=list)
+    reference_rad_s: list[tuple[float, float]] = field(default_factory=list)
+    pose: list[tuple[float, float, float]] = field(default_factory=list)
+    thermal: list[dict[str, float]] = field(default_factory=list)
+    pt100_c: list[tuple[float, float]] = field(default_factory=list)
+
+    def summary(self) -> dict[str, Any]:
+        """The numbers a person reads: counts, period statistics, CPU share."""
+        periods = np.asarray(self.period_s[1:]) if len(self.period_s) > 1 else np.zeros(1)
+        return {
+            "stop_reason": self.stop_reason,
+            "ticks": self.ticks,
+            "overruns": self.overruns,
+            "worst_overrun_streak": self.worst_overrun_streak,
+            "period_p50_s": float(np.percentile(periods, 50)),
+            "period_p99_s": float(np.percentile(periods, 99)),
+            "cpu_share_of_one_core": self.cpu_s / self.wall_s if self.wall_s else 0.0,
+            "thermal_frames": len(self.thermal),
+            "people_seen": int(sum(f["people"] for f in self.thermal)),
+            "pt100_readings": len(self.pt100_c),
+        }
+
+
+def load_role(config: RobotConfig, folder: Path) -> Scenario:
+    """The scenario the configuration names (a path relative to its file, or built-in)."""
+    name = config.scenario
+    candidate = folder / name
+    scenario = load_scenario(candidate if candidate.suffix in (".yaml", ".yml") else name)
+    if config.robot >= scenario.n_robots:
+        raise InputError(
+            f"robot: {config.robot} but scenario {scenario.name!r} has {scenario.n_robots} "
+            f"robots (0 to {scenario.n_robots - 1})"
+        )
+    return scenario
+
+
+def run_onboard(
+    config: RobotConfig,
+    scenario: Scenario,
+    adapters: Adapters,
+    *,
+    stop: threading.Event,
+    progress: Callable[[int, int], None] | None = None,
+) -> OnboardResult:
+    """Run the on-board loop until the duration, arrival, a stop or an overrun streak."""
+    controller = RobotController(scenario, config.robot)
+    dt_s = scenario.dt_s
+    duration_s = min(config.duration_s or scenario.duration_s, scenario.duration_s)
+    n_steps = round(duration_s / dt_s)
+    top_rad_s = scenario.motor.speed_gain_rad_s_per_v * scenario.motor.supply_v
+    cpr = scenario.encoder.counts_per_rev or 2048
+    rad_per_count = 2.0 * np.pi / cpr
+    thermal_every = max(1, round(1.0 / (config.hardware.thermal.rate_hz * dt_s)))
+    pt100_every = max(1, round(1.0 / (config.hardware.pt100.rate_hz * dt_s)))
+    result = OnboardResult()
+    history: list[tuple[int, int]] = []
+    streak = 0
+    cpu0, wall0 = time.process_time(), time.monotonic()
+    deadline = wall0 + dt_s
+    last_start = wall0
+    motors = adapters.motors
+    motors.send(Setpoint(0.0, 0.0))
+    for tick in range(n_steps):
+        start = time.monotonic()
+        result.period_s.append(start - last_start)
+        last_start = start
+        if stop.is_set():
+            result.stop_reason = "signal"
+            break
+        motors.poll()
+        enc = motors.encoders
+        counts = (enc.right_counts, enc.left_counts) if enc is not None else (0, 0)
+        history = [*history[-2:], counts] if history else [counts] * 3
+        measured = (np.array(history[-1]) - np.array(history[0])) * rad_per_count / (2 * dt_s)
+        sensors = Sensors(
+            0, config.robot, tick, t_s=tick * dt_s,
+            counts=(float(counts[0]), float(counts[1])),
+            measured_rad_s=(float(measured[0]), float(measured[1])),
+        )  # fmt: skip
+        command, state = controller.step(sensors)
+        ref = np.clip(command.reference_rad_s, -top_rad_s, top_rad_s)
+        motors.send(Setpoint(float(ref[0]), float(ref[1])))
+        result.t_s.append(tick * dt_s)
+        result.counts.append(counts)
+        result.reference_rad_s.append((float(ref[0]), float(ref[1])))
+        result.pose.append(state.pose)
+        if adapters.thermal is not None and tick % thermal_every == 0:
+            frame = adapters.thermal.read_frame(max_windows=1)
+            if frame is not None:
+                frame_c = frame.astype(float) / 100.0 - KELVIN
+                found = detect(frame_c).detections
+                result.thermal.append({
+                    "t_s": tick * dt_s,
+                    "fires": sum(d.kind == "fire" for d in found),
+                    "people": sum(d.kind == "person" for d in found),
+                    "max_c": float(frame_c.max()),
+                })  # fmt: skip
+        if adapters.pt100 is not None and tick % pt100_every == 0:
+            result.pt100_c.append((tick * dt_s, adapters.pt100.read().temperature_c))
+        result.ticks = tick + 1
+        if progress is not None and tick % 100 == 0:
+            progress(tick, n_steps)
+        if state.arrived:
+            result.stop_reason = "arrived"
+            break
+        now = time.monotonic()
+        if now > deadline:
+            result.overruns += 1
+            streak += 1
+            result.worst_overrun_streak = max(result.worst_overrun_streak, streak)
+            if streak >= config.safety.overrun_streak:
+                result.stop_reason = "overruns"
+                break
+            deadline = now + dt_s  # do not catch up: the next period starts now
+        else:
+            streak = 0
+            time.sleep(deadline - now)
+            deadline += dt_s
+    motors.send(Setpoint(0.0, 0.0))
+    motors.send(EStop())
+    result.cpu_s = time.process_time() - cpu0
+    result.wall_s = time.monotonic() - wall0
+    return result
