@@ -9,6 +9,11 @@
 - the world loop's stages for all three.
 """
 
+from firefleet.estimation.grid._likelihood import (
+    LikelihoodField,
+    field_log_likelihood,
+    likelihood_field,
+)
 from firefleet.estimation.grid._mapping import (
     LogOddsParams,
     Scanner,
@@ -18,12 +23,31 @@ from firefleet.estimation.grid._mapping import (
     occupancy_probability,
     scan_endpoints,
 )
+from firefleet.estimation.grid._mcl import (
+    GridMclParams,
+    MclState,
+    free_cell_poses,
+    mcl_estimate,
+    mcl_global,
+    mcl_step,
+    mcl_tracking,
+)
 
 __all__ = [
+    "GridMclParams",
+    "LikelihoodField",
     "LogOddsParams",
+    "MclState",
     "Scanner",
+    "field_log_likelihood",
+    "free_cell_poses",
+    "likelihood_field",
     "map_agreement_pct",
     "mapping_step",
+    "mcl_estimate",
+    "mcl_global",
+    "mcl_step",
+    "mcl_tracking",
     "merge_log_odds",
     "occupancy_probability",
     "scan_endpoints",

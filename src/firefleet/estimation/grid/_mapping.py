@@ -140,7 +140,7 @@ class Scanner:
         return cls(b, max_range_m)
 
 
-def _ranges(ranges_m: ArrayLike, scanner: Scanner, lead: int) -> FloatArray:
+def check_ranges(ranges_m: ArrayLike, scanner: Scanner, lead: int) -> FloatArray:
     r = np.asarray(ranges_m, dtype=float)
     b = scanner.bearings_rad.size
     if r.ndim != 2 or r.shape != (lead, b):
@@ -179,7 +179,7 @@ def scan_endpoints(
     ([[[3.0, 0.0], [1.0, 4.0]]], [[True, False]])
     """
     p = as_float_array(poses, "poses", (None, 3))
-    r = _ranges(ranges_m, scanner, p.shape[0])
+    r = check_ranges(ranges_m, scanner, p.shape[0])
     hit = r < scanner.max_range_m
     dist = np.where(hit, r, scanner.max_range_m)
     ang = p[:, 2:3] + scanner.bearings_rad
