@@ -32,9 +32,19 @@ from firefleet.estimation.grid._mcl import (
     mcl_step,
     mcl_tracking,
 )
+from firefleet.estimation.grid._slam import (
+    GridSlamParams,
+    GridSlamState,
+    slam_estimate,
+    slam_init,
+    slam_map,
+    slam_step,
+)
 
 __all__ = [
     "GridMclParams",
+    "GridSlamParams",
+    "GridSlamState",
     "LikelihoodField",
     "LogOddsParams",
     "MclState",
@@ -51,4 +61,8 @@ __all__ = [
     "merge_log_odds",
     "occupancy_probability",
     "scan_endpoints",
+    "slam_estimate",
+    "slam_init",
+    "slam_map",
+    "slam_step",
 ]
