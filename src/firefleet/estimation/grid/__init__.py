@@ -40,14 +40,24 @@ from firefleet.estimation.grid._slam import (
     slam_map,
     slam_step,
 )
+from firefleet.estimation.grid._stages import (
+    GridSlamEstimation,
+    MappingEstimation,
+    MclEstimation,
+    ScanFilterState,
+)
 
 __all__ = [
     "GridMclParams",
+    "GridSlamEstimation",
     "GridSlamParams",
     "GridSlamState",
     "LikelihoodField",
     "LogOddsParams",
+    "MappingEstimation",
+    "MclEstimation",
     "MclState",
+    "ScanFilterState",
     "Scanner",
     "field_log_likelihood",
     "free_cell_poses",
