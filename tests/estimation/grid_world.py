@@ -131,11 +131,13 @@ def drive(
     speed_m_s: float = 0.5,
     turn_rad_s: float = 1.5,
     start: int = 0,
+    waypoints: np.ndarray = WAYPOINTS,
 ) -> np.ndarray:
-    """True poses (T, 3) at ``rate_hz`` along the waypoints from ``WAYPOINTS[start]``:
-    straight legs at ``speed_m_s``, turns on the spot; stops at the last waypoint."""
+    """True poses (T, 3) at ``rate_hz`` along the waypoints (M, 2) [m] from
+    ``waypoints[start]``: straight legs at ``speed_m_s``, turns on the spot; stops at the
+    last waypoint."""
     dt = 1.0 / rate_hz
-    pts = WAYPOINTS[start:]
+    pts = waypoints[start:]
     d0 = pts[1] - pts[0]
     pose = np.array([pts[0, 0], pts[0, 1], math.atan2(d0[1], d0[0])])
     out = [pose.copy()]
