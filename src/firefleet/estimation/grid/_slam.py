@@ -7,8 +7,9 @@ frame grid). For each scan:
 1. every particle moves by the odometry increment with noise drawn per particle
    (:func:`._mcl.sample_motion`);
 2. the *proposal*: the pose is refined by scan matching against the particle's own map
-   (hill climbing, :mod:`._scanmatch`); a match scoring under ``min_score`` (an empty
-   or ambiguous map) keeps the odometry's sample;
+   (hill climbing to the mode of scan likelihood x motion model, :mod:`._scanmatch`);
+   a match scoring under ``min_score`` (an empty or ambiguous map) keeps the odometry's
+   sample;
 3. the weight is multiplied by the scan's likelihood at the matched pose, tempered by
    ``1 / weight_gain`` (GMapping's ``lgain``: the beams' errors are not independent,
    and untempered weights collapse the cloud in a few scans);
@@ -45,6 +46,7 @@ from firefleet.estimation.grid._mcl import GridMclParams, sample_motion
 from firefleet.estimation.grid._rays import grid_frame, scan_update
 from firefleet.estimation.grid._scanmatch import match_particles
 from firefleet.estimation.particle_filter import (
+    compose,
     effective_sample_size,
     low_variance_resample,
     normalise_log_weights,
@@ -217,7 +219,12 @@ def slam_step(
     if state.log_odds.shape[1:] != frame.shape:
         raise InputError(f"the state's maps {state.log_odds.shape[1:]} are not on {frame.shape}")
     n = state.poses.shape[0]
+    prior = compose(state.poses, d)  # the motion model's mean for each particle
     poses = sample_motion(state.poses, d, params.motion, rng)
+    dist = float(np.hypot(d[0], d[1]))
+    mo = params.motion
+    sigma_xy = mo.trans_per_m * dist + mo.floor_m
+    sigma_th = mo.rot_per_rad * abs(float(d[2])) + mo.rot_per_m * dist + mo.floor_rad
     log_w = state.log_weights
     ox, oy, res, _, _ = grid_frame(frame)
     use = np.unique(np.linspace(0, z.size - 1, min(z.size, params.max_beams)).round())
@@ -229,6 +236,7 @@ def slam_step(
         match_particles(
             state.log_odds,
             poses,
+            prior,
             np.ascontiguousarray(z[ret]),
             np.ascontiguousarray(scanner.bearings_rad[ret]),
             ox,
@@ -242,6 +250,9 @@ def slam_step(
             params.min_score_ratio * ret.size,
             params.z_hit,
             params.z_rand,
+            1.0 / params.weight_gain,
+            sigma_xy,
+            sigma_th,
             matched,
             loglik,
         )
