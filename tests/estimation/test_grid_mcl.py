@@ -123,9 +123,9 @@ def test_bad_parameters_and_scans_are_input_errors() -> None:
 @pytest.mark.parametrize("seed", [0, 1])
 def test_global_localisation_in_the_built_in_office_up_to_its_symmetry(seed: int) -> None:
     """The built-in office (world) is symmetric under a half turn about its centre (but
-    for the rounding of a few wall cells), so no sensor can tell a pose from its twin: from a uniform prior MCL must converge,
-    within 30 s of driving, to one of the two (the deliverable's office needs an
-    asymmetry for a unique answer)."""
+    for the rounding of a few wall cells), so no sensor can tell a pose from its twin:
+    from a uniform prior MCL must converge, within 30 s of driving, to one of the two
+    (the deliverable's office needs an asymmetry for a unique answer)."""
     grid = load_map("office")
     assert np.mean(grid.occupied == grid.occupied[::-1, ::-1]) > 0.99  # the symmetry
     field = likelihood_field(grid)
