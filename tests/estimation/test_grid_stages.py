@@ -117,6 +117,7 @@ def test_stages_plug_into_the_loop_and_need_their_reading() -> None:
     stages = Stages(world=StaticWorld(), sensors=lidar, estimation=MappingEstimation(grid, SCANNER))
     rec = run_staged(drive, stack, stages, decide, None, None, np.array([0, 50]), 50)
     np.testing.assert_allclose(rec.series["est"][-1], rec.pose[-1], atol=0.01)
+    assert stages.estimation.occupancy(rec.estimation_state).shape == grid.shape  # type: ignore[attr-defined]
     stages = Stages(world=StaticWorld(), estimation=MappingEstimation(grid, SCANNER))
     with pytest.raises(InputError, match="lidar_range_m"):
         run_staged(drive, stack, stages, decide, None, None, np.array([0, 50]), 50)

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
 import numpy as np
@@ -450,6 +450,9 @@ voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
         The wheel stack's quantities (as :class:`~firefleet.sim.result.SimResult`).
     series : dict of str to ndarray
         The decision's series by name, time first.
+    estimation_state : object
+        The estimation stage's state after the last tick (its maps and particles, for a
+        kind to record).
     """
 
     t_s: FloatArray
@@ -461,6 +464,7 @@ voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
     voltage_v: FloatArray
     load_torque_n_m: FloatArray
     series: dict[str, FloatArray]
+    estimation_state: Any = None
 
 
 def run_staged(
@@ -547,7 +551,7 @@ def run_staged(
             )
         if progress is not None:
             progress(min(int(k1), n_steps), n_steps)
-    return rec.recording(dt)
+    return replace(rec.recording(dt), estimation_state=estimate)
 
 
 class _Recorder:
