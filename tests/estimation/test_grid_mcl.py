@@ -81,21 +81,25 @@ def run_mcl(
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_global_localisation_from_the_lidar_converges_within_30_s(seed: int) -> None:
-    errors = run_mcl(seed, Scanner.ring(90, 360.0, 10.0), GridMclParams())
+    # the test office's furniture tells its rooms apart: a small KLD floor will do
+    errors = run_mcl(seed, Scanner.ring(90, 360.0, 10.0), GridMclParams(min_particles=300))
     assert np.all(errors[-round(5 * RATE_HZ) :] < 0.3)  # the last 5 s of the 30 s drive
     assert np.median(errors[-round(5 * RATE_HZ) :]) < 0.1
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_global_localisation_from_the_ultrasonic_ring_converges_within_30_s(seed: int) -> None:
-    prm = GridMclParams(n_particles=20000, sigma_hit_m=0.3)
+    prm = GridMclParams(n_particles=20000, min_particles=300, sigma_hit_m=0.3)
     errors = run_mcl(seed, Scanner.ring(8, 360.0, 4.0), prm, cone_deg=15.0)
     assert np.all(errors[-round(5 * RATE_HZ) :] < 0.3)
 
 
 def test_tracking_from_the_truth_stays_close() -> None:
     errors = run_mcl(
-        5, Scanner.ring(90, 360.0, 10.0), GridMclParams(n_particles=500), start="truth"
+        5,
+        Scanner.ring(90, 360.0, 10.0),
+        GridMclParams(n_particles=500, min_particles=100),
+        start="truth",
     )
     assert errors.max() < 0.15
     assert np.sqrt(np.mean(errors**2)) < 0.05
@@ -130,7 +134,7 @@ def test_global_localisation_in_the_built_in_office_up_to_its_symmetry(seed: int
     assert np.mean(grid.occupied == grid.occupied[::-1, ::-1]) > 0.99  # the symmetry
     field = likelihood_field(grid)
     scanner = Scanner.ring(90, 360.0, 10.0)
-    prm = GridMclParams(min_particles=5000)
+    prm = GridMclParams()  # 10,000 particles, KLD down to 5,000
     rng = np.random.default_rng(seed)
     path = np.array([[2.5, 2.0], [2.5, 5.0], [12.5, 5.0], [12.5, 7.5]])
     truth = drive(30.0, rate_hz=RATE_HZ, waypoints=path)

@@ -83,7 +83,9 @@ def test_mapping_stage_builds_the_map_at_the_true_poses() -> None:
 
 def test_mcl_stage_localises_globally() -> None:
     grid = office(0.05)
-    stage = MclEstimation(grid, SCANNER, params=GridMclParams(n_particles=8000), seed=3)
+    stage = MclEstimation(
+        grid, SCANNER, params=GridMclParams(n_particles=8000, min_particles=300), seed=3
+    )
     state, truth, est = run(stage)
     err = np.hypot(*(est[:, :2] - truth[:, :2]).T)
     assert err[0] > 0.3  # it did start from the uniform prior

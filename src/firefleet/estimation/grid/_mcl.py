@@ -16,8 +16,10 @@ particles as keep the Kullback-Leibler divergence between the sample-based and t
 true posterior below ``kld_error`` with probability ``kld_quantile``, counted over
 bins of ``kld_bin_m`` x ``kld_bin_m`` x ``kld_bin_rad``, between ``min_particles`` and
 ``n_particles``. Global localisation starts from :func:`mcl_global`: ``n_particles``
-uniform over the free cells and every heading; once converged the cloud shrinks to a
-few hundred particles.
+uniform over the free cells and every heading. The floor ``min_particles`` = 5,000 is
+what keeps the hypotheses of a building of identical rooms alive until the robot sees
+what tells them apart (with 300 to 2,000, MCL locked onto the wrong room of the
+built-in office in some seeded runs); tracking alone does with a few hundred.
 
 The pose estimate is the weighted mean of the particles within ``cluster_radius_m``
 of the heaviest mode (the mean of a multi-modal cloud would be in none of its modes).
@@ -97,7 +99,7 @@ class GridMclParams:
     """
 
     n_particles: int = 10000
-    min_particles: int = 300
+    min_particles: int = 5000
     kld_error: float = 0.05
     kld_quantile_z: float = 2.33
     kld_bin_m: float = 0.2
