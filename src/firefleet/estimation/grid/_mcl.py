@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from firefleet._typing import FloatArray
+from firefleet._typing import FloatArray, IntArray
 from firefleet.errors import InputError, as_float_array, check_fields
 from firefleet.estimation.grid._likelihood import LikelihoodField, field_log_likelihood
 from firefleet.estimation.grid._mapping import Scanner, check_ranges
@@ -339,6 +339,14 @@ def mcl_step(
     return MclState(particles, log_w - np.max(log_w), w_slow, w_fast)
 
 
+def _pack(keys: IntArray) -> IntArray:
+    """Integer bin coordinates (P, D), each within +-2^20, as one int64 per row."""
+    out = np.zeros(keys.shape[0], np.int64)
+    for j in range(keys.shape[1]):
+        out = (out << 21) + (keys[:, j] + (1 << 20))
+    return out
+
+
 def kld_count(particles: FloatArray, params: GridMclParams) -> int:
     """KLD sampling's particle count for a cloud (P, 3) (Fox 2003, eq. 12; Thrun et
     al. 2005, Table 8.4): ``(k - 1) / (2 eps) (1 - 2/(9(k-1)) + sqrt(2/(9(k-1))) z)^3``
@@ -358,7 +366,7 @@ def kld_count(particles: FloatArray, params: GridMclParams) -> int:
     keys = np.floor(
         particles / np.array([params.kld_bin_m, params.kld_bin_m, params.kld_bin_rad])
     ).astype(np.int64)
-    k = len(np.unique(keys, axis=0))
+    k = len(np.unique(_pack(keys)))
     if k <= 1:
         return params.min_particles
     a = 2.0 / (9.0 * (k - 1))
@@ -372,7 +380,7 @@ def mcl_estimate(state: MclState, params: GridMclParams) -> FloatArray:
     w = normalise_log_weights(state.log_weights)
     p = state.particles
     r = params.cluster_radius_m
-    _, bins = np.unique(np.floor(p[:, :2] / r).astype(np.int64), axis=0, return_inverse=True)
+    _, bins = np.unique(_pack(np.floor(p[:, :2] / r).astype(np.int64)), return_inverse=True)
     mass = np.bincount(bins.ravel(), weights=w)
     top = bins.ravel() == int(np.argmax(mass))  # the heaviest r x r square
     centre = (w[top] @ p[top, :2]) / w[top].sum()
