@@ -236,7 +236,13 @@ def run(console: Console) -> h.TopicResult:
             )
         )
     floors = (h.Floor.on(rows[0], ">=", 1.0),)
-    return h.TopicResult(tuple(rows), floors, {"slam": slam, "mcl": mcl})
+    peer = (
+        "none measured: PythonRobotics has no grid SLAM; the Python RBPF ports found "
+        "(toolbuddy/2D-Grid-SLAM, Sollimann/Occupancy-Grid-FastSLAM) take other inputs "
+        "and were not run on this scene"
+    )
+    console.print(f"  peer: {peer}")
+    return h.TopicResult(tuple(rows), floors, {"slam": slam, "mcl": mcl, "peer": peer})
 
 
 if __name__ == "__main__":
