@@ -35,6 +35,9 @@ TOPICS = (
     "thermal",
     "stereo",
     "slam",
+    "sweep",
+    "net",
+    "link",
     "gridslam",
 )
 ISSUE_12: tuple[tuple[str, h.Op, float], ...] = (

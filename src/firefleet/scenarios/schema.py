@@ -44,6 +44,7 @@ from firefleet.scenarios._commands import (
     VoltageStep,
     WheelSpeedStep,
 )
+from firefleet.scenarios._network import LinkSpec, MotorFault
 
 __all__ = [
     "CircleObstacle",
@@ -51,7 +52,9 @@ __all__ = [
     "Command",
     "Formation",
     "LeaderPath",
+    "LinkSpec",
     "LoadStep",
+    "MotorFault",
     "PathFollowing",
     "RobotFailure",
     "Scenario",
@@ -111,6 +114,10 @@ class Scenario:
         Hardware and low-level control; defaults from the deliverable's Table 2.
     load : LoadStep
         Load torque on the wheel motors.
+    faults : tuple of MotorFault
+        Motor faults (a robot's motors at a fraction of their voltage for a while).
+    link : LinkSpec, optional
+        The team's wireless link (``firefleet.sim.link``); None: ideal.
     reproduces : str
         The deliverable's figure(s) this scenario reproduces ("" for none).
     deliverable_says : str
@@ -138,6 +145,8 @@ class Scenario:
     encoder: EncoderParams = field(default_factory=EncoderParams)
     speed_pid: PidParams = field(default_factory=PidParams)
     load: LoadStep = field(default_factory=LoadStep)
+    faults: tuple[MotorFault, ...] = ()
+    link: LinkSpec | None = None
     reproduces: str = ""
     deliverable_says: str = ""
     claims: tuple[Claim, ...] = ()
@@ -165,6 +174,12 @@ class Scenario:
             )
         if self.seed < 0:
             raise InputError(f"seed must be >= 0, got {self.seed}")
+        for fault in self.faults:
+            if fault.robot > self.n_robots:
+                raise InputError(
+                    f"faults.robot = {fault.robot}, but the scenario has {self.n_robots} "
+                    "robot(s) (poses)"
+                )
         self.command.check_team(self.n_robots, self.duration_s)  # each command's own rule
         known = _metric_names(self.command.kind)
         for claim in self.claims:

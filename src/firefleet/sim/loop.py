@@ -30,6 +30,7 @@ two agree).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -40,7 +41,7 @@ from numpy.typing import NDArray
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
-from firefleet.scenarios.schema import Scenario
+from firefleet.scenarios.schema import MotorFault, Scenario
 from firefleet.sim.drive import (
     DriveStack,
     DriveState,
@@ -59,6 +60,7 @@ __all__ = [
     "Decider",
     "FusedRun",
     "IdealLink",
+    "Link",
     "NoEstimation",
     "NoSensors",
     "Odometry",
@@ -95,9 +97,13 @@ class WorldState:
     ----------
     load_torque_n_m : ndarray, shape (N, 2)
         Load torque on each wheel motor [N m], held over the tick.
+    voltage_scale : ndarray, shape (N,), or None
+        The fraction of its commanded voltage each robot's motors get (a motor fault);
+        None: all of it.
     """
 
     load_torque_n_m: FloatArray
+    voltage_scale: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -110,10 +116,14 @@ class StaticWorld:
         Load torque on every wheel motor from ``start_s`` on [N m] (0 before).
     start_s : float
         Time of the load step [s].
+    faults : tuple of MotorFault
+        Motor faults: robot ``robot`` (from 1) gets ``voltage_scale`` of its voltage
+        from ``start_s`` (included) to ``end_s`` (excluded).
     """
 
     torque_n_m: float = 0.0
     start_s: float = 0.0
+    faults: tuple[MotorFault, ...] = ()
 
     def init(self, n_robots: int) -> WorldState:
         """The world before the first tick."""
@@ -122,7 +132,15 @@ class StaticWorld:
     def step(self, state: WorldState, t_s: float) -> WorldState:
         """The world at ``t_s``."""
         tau = self.torque_n_m if t_s >= self.start_s - 1e-9 else 0.0
-        return WorldState(load_torque_n_m=np.full(state.load_torque_n_m.shape, tau))
+        scale = None
+        for fault in self.faults:
+            if fault.start_s - 1e-9 <= t_s < fault.end_s - 1e-9:
+                if scale is None:
+                    scale = np.ones(state.load_torque_n_m.shape[0])
+                scale[fault.robot - 1] *= fault.voltage_scale
+        return WorldState(
+            load_torque_n_m=np.full(state.load_torque_n_m.shape, tau), voltage_scale=scale
+        )
 
 
 @dataclass(frozen=True)
@@ -153,9 +171,31 @@ class Sensors(Protocol):
 class IdealLink:
     """Every message arrives, unchanged, at the next tick."""
 
-    def exchange(self, sent: Messages) -> Messages:
+    def init(self, n_robots: int, dt_s: float) -> None:
+        """Nothing to hold."""
+
+    def exchange(
+        self, state: None, sent: Messages, t_s: float, pose: FloatArray
+    ) -> tuple[Messages, None]:
         """The messages delivered this tick: all those sent last tick."""
-        return sent
+        return sent, None
+
+    def counters(self, state: None) -> dict[str, float]:
+        """No counters: the ideal link loses nothing."""
+        return {}
+
+
+class Link(Protocol):
+    """The link stage: the messages sent last tick, as the receivers hold them now
+    (:mod:`firefleet.sim.link` models a real radio)."""
+
+    def init(self, n_robots: int, dt_s: float) -> Any: ...
+
+    def exchange(
+        self, state: Any, sent: Messages, t_s: float, pose: FloatArray
+    ) -> tuple[Messages, Any]: ...
+
+    def counters(self, state: Any) -> dict[str, float]: ...
 
 
 @dataclass(frozen=True)
@@ -220,7 +260,7 @@ class Stages:
 
     world: StaticWorld
     sensors: Sensors = field(default_factory=NoSensors)
-    link: IdealLink = field(default_factory=IdealLink)
+    link: Link = field(default_factory=IdealLink)
     estimation: Estimation = field(default_factory=Odometry)
 
     def names(self) -> dict[str, str]:
@@ -334,10 +374,31 @@ def default_stages(scenario: Scenario, decider: Decider) -> Stages:
     >>> default_stages(scenario, decider).names()
     {'world': 'StaticWorld', 'sensors': 'NoSensors', 'link': 'IdealLink', 'estimation': 'Odometry'}
     """
+    link: Link = IdealLink()
+    if _impaired(scenario):
+        from firefleet.sim.link import LinkModel  # the link imports this module's types
+
+        link = LinkModel.from_spec(scenario.link, seed=scenario.seed)
     return Stages(
-        world=StaticWorld(torque_n_m=scenario.load.torque_n_m, start_s=scenario.load.start_s),
+        world=StaticWorld(
+            torque_n_m=scenario.load.torque_n_m,
+            start_s=scenario.load.start_s,
+            faults=scenario.faults,
+        ),
+        link=link,
         estimation=Odometry() if decider.uses_estimate else NoEstimation(),
     )
+
+
+def _impaired(scenario: Scenario) -> bool:
+    """Whether the scenario's link is anything but the ideal one."""
+    spec = scenario.link
+    if spec is None:
+        return False
+    given = dataclasses.asdict(spec)
+    given.pop("preset")
+    given.pop("timeout_s")
+    return spec.preset != "ideal" or any(v is not None for v in given.values())
 
 
 def chunk_bounds(n_steps: int) -> NDArray[np.int64]:
@@ -409,7 +470,9 @@ def run_loop(
     if steps[0] < 0:
         raise InputError(f"rec_steps must be >= 0, got {steps[0]}")
     phase = encoder_phase(scenario.encoder, n, rng)
-    if fused is not None and stages is None:
+    # the fused loops run the ideal link; of them only path following's knows faults
+    fault_free = not scenario.faults or scenario.command.kind == "path-following"
+    if fused is not None and stages is None and not _impaired(scenario) and fault_free:
         return fused(scenario, phase, rec_steps, progress)
 
     stg = stages if stages is not None else default_stages(scenario, decider)
@@ -431,7 +494,7 @@ def run_loop(
         current_a=rec.current_a,
         voltage_v=rec.voltage_v,
         load_torque_n_m=rec.load_torque_n_m,
-        extra={name: rec.series[name] for name in decider.series},
+        extra={name: rec.series[name] for name in (*decider.series, *rec.link_series)},
     )
 
 
@@ -449,7 +512,10 @@ class Recording:
 voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
         The wheel stack's quantities (as :class:`~firefleet.sim.result.SimResult`).
     series : dict of str to ndarray
-        The decision's series by name, time first.
+        The decision's series by name, time first (and the link's counters).
+    link_series : tuple of str
+        The names of the link's counters among ``series`` (T,): cumulative messages
+        sent, lost, ... (:meth:`Link.counters`).
     estimation_state : object
         The estimation stage's state after the last tick (its maps and particles, for a
         kind to record).
@@ -464,6 +530,7 @@ voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
     voltage_v: FloatArray
     load_torque_n_m: FloatArray
     series: dict[str, FloatArray]
+    link_series: tuple[str, ...] = ()
     estimation_state: Any = None
 
 
@@ -527,13 +594,14 @@ def run_staged(
     world = stages.world.init(n)
     estimate = stages.estimation.init(drive.pose, drive)
     sent: Messages = {}
+    link = stages.link.init(n, dt)
     rec = _Recorder(rec_steps, n)
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         for k in range(int(k0), int(k1)):
             t = k * dt
             world = stages.world.step(world, t)
             readings = stages.sensors.read(world, drive)
-            inbox = stages.link.exchange(sent)
+            inbox, link = stages.link.exchange(link, sent, t, drive.pose)
             if k > 0:  # the encoders have counted since the last tick
                 estimate = stages.estimation.step(estimate, drive, stack, readings)
             inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
@@ -543,7 +611,9 @@ def run_staged(
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
             else:
                 voltage = command.voltage_v
-            rec.record(k, drive, command, voltage, world)
+            if world.voltage_scale is not None:  # a motor fault
+                voltage = voltage * world.voltage_scale[:, None]
+            rec.record(k, drive, command, voltage, world, stages.link.counters(link))
             if k == n_steps:
                 break
             drive = drive_step(
@@ -567,6 +637,7 @@ class _Recorder:
             for name in ("speed", "measured", "ref", "current", "voltage", "load")
         }
         self.series: dict[str, FloatArray] = {}
+        self.link_series: list[str] = []
 
     def record(
         self,
@@ -575,6 +646,7 @@ class _Recorder:
         command: WheelCommand,
         voltage: FloatArray,
         world: WorldState,
+        counters: Mapping[str, float],
     ) -> None:
         row = self.row
         if row >= self.rec_steps.size or self.rec_steps[row] != k:
@@ -586,6 +658,11 @@ class _Recorder:
         self.wheel["current"][row] = drive.current_a
         self.wheel["voltage"][row] = voltage
         self.wheel["load"][row] = world.load_torque_n_m
+        for name, count in counters.items():
+            if name not in self.series:
+                self.series[name] = np.empty(self.rec_steps.size)
+                self.link_series.append(name)
+            self.series[name][row] = count
         for name, value in command.series.items():
             if name not in self.series:
                 self.series[name] = np.empty((self.rec_steps.size, *np.shape(value)))
@@ -603,4 +680,5 @@ class _Recorder:
             voltage_v=self.wheel["voltage"],
             load_torque_n_m=self.wheel["load"],
             series=self.series,
+            link_series=tuple(self.link_series),
         )
