@@ -33,7 +33,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
 import numpy as np
@@ -214,8 +214,10 @@ class Odometry:
         """The estimate at the start: the true start poses."""
         return OdometryState(pose=pose.copy(), counts=drive.encoder.history[-1])
 
-    def step(self, state: OdometryState, drive: DriveState, stack: DriveStack) -> OdometryState:
-        """The estimate moved by the counts since its last update."""
+    def step(
+        self, state: OdometryState, drive: DriveState, stack: DriveStack, readings: Messages
+    ) -> OdometryState:
+        """The estimate moved by the counts since its last update (readings unused)."""
         counts = drive.encoder.history[-1]
         return OdometryState(
             pose=dead_reckoning(state.pose, state.counts, counts, stack), counts=counts
@@ -233,7 +235,7 @@ class NoEstimation:
     def init(self, pose: FloatArray, drive: DriveState) -> None:
         """Nothing to hold."""
 
-    def step(self, state: None, drive: DriveState, stack: DriveStack) -> None:
+    def step(self, state: None, drive: DriveState, stack: DriveStack, readings: Messages) -> None:
         """Nothing to update."""
 
     def pose(self, state: None) -> FloatArray | None:
@@ -242,11 +244,12 @@ class NoEstimation:
 
 
 class Estimation(Protocol):
-    """A pose estimator of the loop."""
+    """A pose estimator of the loop; ``step`` gets the readings the sensors stage gave
+    this tick, by name."""
 
     def init(self, pose: FloatArray, drive: DriveState) -> Any: ...
 
-    def step(self, state: Any, drive: DriveState, stack: DriveStack) -> Any: ...
+    def step(self, state: Any, drive: DriveState, stack: DriveStack, readings: Messages) -> Any: ...
 
     def pose(self, state: Any) -> FloatArray | None: ...
 
@@ -513,6 +516,9 @@ voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
     link_series : tuple of str
         The names of the link's counters among ``series`` (T,): cumulative messages
         sent, lost, ... (:meth:`Link.counters`).
+    estimation_state : object
+        The estimation stage's state after the last tick (its maps and particles, for a
+        kind to record).
     """
 
     t_s: FloatArray
@@ -525,6 +531,7 @@ voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
     load_torque_n_m: FloatArray
     series: dict[str, FloatArray]
     link_series: tuple[str, ...] = ()
+    estimation_state: Any = None
 
 
 def run_staged(
@@ -596,7 +603,7 @@ def run_staged(
             readings = stages.sensors.read(world, drive)
             inbox, link = stages.link.exchange(link, sent, t, drive.pose)
             if k > 0:  # the encoders have counted since the last tick
-                estimate = stages.estimation.step(estimate, drive, stack)
+                estimate = stages.estimation.step(estimate, drive, stack, readings)
             inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
             state, command = decide(state, inputs, params, dt)
             sent = command.outbox
@@ -614,7 +621,7 @@ def run_staged(
             )
         if progress is not None:
             progress(min(int(k1), n_steps), n_steps)
-    return rec.recording(dt)
+    return replace(rec.recording(dt), estimation_state=estimate)
 
 
 class _Recorder:

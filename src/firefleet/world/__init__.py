@@ -2,7 +2,8 @@
 fire, heat and smoke on them, and the people in them.
 
 The grid convention (row 0 at the map's top, ``origin`` at the lower-left corner) lives
-in :class:`OccupancyGrid` alone.
+in :class:`OccupancyGrid` alone. :func:`load_map` reads a built-in map (``office``,
+``warehouse``, ``maze``) or any ``map_server`` YAML with its PGM or PNG image.
 """
 
 from firefleet.world._fields import HEAT, SMOKE, FieldParams, diffuse_step, stable_substeps
@@ -17,6 +18,7 @@ from firefleet.world._fire import (
     fire_step,
 )
 from firefleet.world._grid import OccupancyGrid
+from firefleet.world._load import BUILTIN_MAPS, load_map, parse_map
 from firefleet.world._victims import (
     BODY_C,
     VictimParams,
@@ -27,6 +29,7 @@ from firefleet.world._victims import (
 
 __all__ = [
     "BODY_C",
+    "BUILTIN_MAPS",
     "BURNING",
     "BURNT",
     "HEAT",
@@ -42,6 +45,8 @@ __all__ = [
     "diffuse_step",
     "fire_init",
     "fire_step",
+    "load_map",
+    "parse_map",
     "stable_substeps",
     "victim_dose_rate",
     "victim_step",
