@@ -44,6 +44,14 @@ from firefleet.scenarios._commands import (
     VoltageStep,
     WheelSpeedStep,
 )
+from firefleet.scenarios._world import (
+    LidarSpec,
+    Navigate,
+    SensorsSpec,
+    UltrasonicSpec,
+    WorldSpec,
+    check_world,
+)
 
 __all__ = [
     "CircleObstacle",
@@ -51,12 +59,17 @@ __all__ = [
     "Command",
     "Formation",
     "LeaderPath",
+    "LidarSpec",
     "LoadStep",
+    "Navigate",
     "PathFollowing",
     "RobotFailure",
     "Scenario",
+    "SensorsSpec",
+    "UltrasonicSpec",
     "VoltageStep",
     "WheelSpeedStep",
+    "WorldSpec",
     "parse_scenario",
     "read_scenario_file",
 ]
@@ -111,6 +124,10 @@ class Scenario:
         Hardware and low-level control; defaults from the deliverable's Table 2.
     load : LoadStep
         Load torque on the wheel motors.
+    world : WorldSpec, optional
+        The building (a map); None: an empty plane.
+    sensors : SensorsSpec, optional
+        The range sensors each robot carries; None: none.
     reproduces : str
         The deliverable's figure(s) this scenario reproduces ("" for none).
     deliverable_says : str
@@ -138,6 +155,8 @@ class Scenario:
     encoder: EncoderParams = field(default_factory=EncoderParams)
     speed_pid: PidParams = field(default_factory=PidParams)
     load: LoadStep = field(default_factory=LoadStep)
+    world: WorldSpec | None = None
+    sensors: SensorsSpec | None = None
     reproduces: str = ""
     deliverable_says: str = ""
     claims: tuple[Claim, ...] = ()
@@ -166,6 +185,7 @@ class Scenario:
         if self.seed < 0:
             raise InputError(f"seed must be >= 0, got {self.seed}")
         self.command.check_team(self.n_robots, self.duration_s)  # each command's own rule
+        check_world(self.world, self.sensors, self.poses, self.command)
         known = _metric_names(self.command.kind)
         for claim in self.claims:
             if claim.metric not in known:
