@@ -176,8 +176,10 @@ class Odometry:
         """The estimate at the start: the true start poses."""
         return OdometryState(pose=pose.copy(), counts=drive.encoder.history[-1])
 
-    def step(self, state: OdometryState, drive: DriveState, stack: DriveStack) -> OdometryState:
-        """The estimate moved by the counts since its last update."""
+    def step(
+        self, state: OdometryState, drive: DriveState, stack: DriveStack, readings: Messages
+    ) -> OdometryState:
+        """The estimate moved by the counts since its last update (readings unused)."""
         counts = drive.encoder.history[-1]
         return OdometryState(
             pose=dead_reckoning(state.pose, state.counts, counts, stack), counts=counts
@@ -195,7 +197,7 @@ class NoEstimation:
     def init(self, pose: FloatArray, drive: DriveState) -> None:
         """Nothing to hold."""
 
-    def step(self, state: None, drive: DriveState, stack: DriveStack) -> None:
+    def step(self, state: None, drive: DriveState, stack: DriveStack, readings: Messages) -> None:
         """Nothing to update."""
 
     def pose(self, state: None) -> FloatArray | None:
@@ -204,11 +206,12 @@ class NoEstimation:
 
 
 class Estimation(Protocol):
-    """A pose estimator of the loop."""
+    """A pose estimator of the loop; ``step`` gets the readings the sensors stage gave
+    this tick, by name."""
 
     def init(self, pose: FloatArray, drive: DriveState) -> Any: ...
 
-    def step(self, state: Any, drive: DriveState, stack: DriveStack) -> Any: ...
+    def step(self, state: Any, drive: DriveState, stack: DriveStack, readings: Messages) -> Any: ...
 
     def pose(self, state: Any) -> FloatArray | None: ...
 
@@ -554,7 +557,7 @@ def run_staged(
             readings = stages.sensors.read(world, drive)
             inbox = stages.link.exchange(sent)
             if k > 0:  # the encoders have counted since the last tick
-                estimate = stages.estimation.step(estimate, drive, stack)
+                estimate = stages.estimation.step(estimate, drive, stack, readings)
             inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
             state, command = decide(state, inputs, params, dt)
             if estimation_series is not None:  # the estimator's own quantities
