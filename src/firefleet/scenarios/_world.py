@@ -218,9 +218,9 @@ def check_world(
             raise InputError(
                 f"command.goals_m[{i}]: ({goal[0]:g}, {goal[1]:g}) {why} of map {world.map!r}"
             )
-    if navigate.localisation in ("mcl", "slam"):
-        if sensors is None or (sensors.ultrasonic is None and sensors.lidar is None):
-            raise InputError(
-                f"sensors: localisation {navigate.localisation!r} needs a range sensor "
-                "(sensors.ultrasonic or sensors.lidar)"
-            )
+    ranged = sensors is not None and (sensors.ultrasonic is not None or sensors.lidar is not None)
+    if navigate.localisation in ("mcl", "slam") and not ranged:
+        raise InputError(
+            f"sensors: localisation {navigate.localisation!r} needs a range sensor "
+            "(sensors.ultrasonic or sensors.lidar)"
+        )

@@ -50,7 +50,16 @@ from firefleet.sim.registry import TaskKind
 from firefleet.sim.result import SimResult
 from firefleet.world import OccupancyGrid
 
-__all__ = ["KINDS", "NavigateParams", "Tracked", "navigate_decide", "navigate_stages"]
+__all__ = [
+    "KINDS",
+    "NavigateParams",
+    "NavigateState",
+    "Tracked",
+    "navigate_decide",
+    "navigate_stages",
+    "reading_bearings",
+    "reading_limits",
+]
 
 RANGE_READINGS = ("ultrasonic_range_m", "lidar_range_m", "stereo_scan_m")
 """The range sensors' readings, by the names the sensors stage gives them."""
@@ -107,13 +116,13 @@ class Tracked:
         state: TrackedState,
         drive: DriveState,
         stack: DriveStack,
-        readings: Messages | None = None,
+        readings: Messages,
     ) -> TrackedState:
         """Both moved by the counts since the last tick (the filter also by the scans)."""
-        odometry = Odometry().step(state.odometry, drive, stack)
+        odometry = Odometry().step(state.odometry, drive, stack, readings)
         inner = state.inner
         if self.inner is not None:
-            inner = self.inner.step(inner, drive, stack, readings if readings is not None else {})
+            inner = self.inner.step(inner, drive, stack, readings)
         return TrackedState(odometry, inner)
 
     def pose(self, state: TrackedState) -> FloatArray:
@@ -173,18 +182,11 @@ def _localisation(scenario: Scenario, grid: OccupancyGrid, rng: np.random.Genera
     cmd = _command(scenario)
     if cmd.localisation == "odometry":
         return None
-    from firefleet.estimation.grid import GridSlamEstimation, MclEstimation, Scanner
+    from firefleet.estimation.grid import GridSlamEstimation, MclEstimation
 
-    spec = scenario.sensors
-    assert spec is not None  # the schema checks the sensors a filter needs
-    if spec.lidar is not None:
-        scanner = Scanner.ring(spec.lidar.beams, spec.lidar.fov_deg, spec.lidar.max_range_m)
-        reading = "lidar_range_m"
-    else:
-        assert spec.ultrasonic is not None
-        u = spec.ultrasonic
-        scanner = Scanner.ring(u.count, 360.0, u.max_range_m)
-        reading = "ultrasonic_range_m"
+    scanners = _scanners(scenario)  # the schema checks a filter has one
+    reading = "lidar_range_m" if "lidar_range_m" in scanners else "ultrasonic_range_m"
+    scanner = scanners[reading]
     seed = int(rng.integers(2**31))
     if cmd.localisation == "mcl":
         return MclEstimation(grid, scanner, reading=reading, start="global", seed=seed)
@@ -229,29 +231,66 @@ class NavigateParams:
         Nominal geometry, for the wheel references.
     bearings_rad : dict of str to ndarray
         Each range reading's beam bearings relative to the heading [rad], (B,).
+    period_s : float
+        The navigation controller runs every ``period_s`` (10 Hz, a lidar's scan rate);
+        the wheel references hold in between.
     """
 
     navigation: Any
     geometry: RobotGeometry
     bearings_rad: dict[str, FloatArray]
+    period_s: float = 0.1
+
+
+@dataclass(frozen=True, eq=False)
+class NavigateState:
+    """The navigation controller's state and the command it holds until its next run."""
+
+    navigation: Any
+    v_m_s: FloatArray
+    omega_rad_s: FloatArray
+    next_s: float
 
 
 _UNDER_WAY = ("moving", "waiting")
 """Navigation statuses of a robot still on its way (the others are final)."""
 
 
-def _bearings(scenario: Scenario) -> dict[str, FloatArray]:
+def _scanners(scenario: Scenario) -> dict[str, Any]:
+    """The beams of each range reading (``firefleet.estimation.grid.Scanner``): the
+    lidar's ``beams`` over ``fov_deg`` centred ahead, the ultrasonic ring's ``count``
+    evenly round the robot."""
     spec = scenario.sensors
-    out: dict[str, FloatArray] = {}
     if spec is None:
-        return out
-    from firefleet.sim.ranging import lidar_bearings, ultrasonic_bearings
+        return {}
+    from firefleet.estimation.grid import Scanner
 
+    out: dict[str, Any] = {}
     if spec.ultrasonic is not None:
-        out["ultrasonic_range_m"] = np.asarray(ultrasonic_bearings(spec.ultrasonic.count))
+        u = spec.ultrasonic
+        out["ultrasonic_range_m"] = Scanner.ring(u.count, 360.0, u.max_range_m)
     if spec.lidar is not None:
-        out["lidar_range_m"] = np.asarray(lidar_bearings(spec.lidar.beams, spec.lidar.fov_deg))
+        li = spec.lidar
+        out["lidar_range_m"] = Scanner.ring(li.beams, li.fov_deg, li.max_range_m)
     return out
+
+
+def reading_bearings(scenario: Scenario) -> dict[str, FloatArray]:
+    """Each range reading's beam bearings relative to the heading [rad], (B,), by name.
+
+    Examples
+    --------
+    >>> from firefleet import load_scenario
+    >>> from firefleet.sim.kinds.navigate import reading_bearings
+    >>> {k: v.shape for k, v in reading_bearings(load_scenario("nav-mcl-office")).items()}
+    {'ultrasonic_range_m': (8,)}
+    """
+    return {name: np.asarray(s.bearings_rad) for name, s in _scanners(scenario).items()}
+
+
+def reading_limits(scenario: Scenario) -> dict[str, float]:
+    """Each range reading's maximum range [m], by name."""
+    return {name: float(s.max_range_m) for name, s in _scanners(scenario).items()}
 
 
 def _init(scenario: Scenario) -> tuple[Any, NavigateParams]:
@@ -260,19 +299,22 @@ def _init(scenario: Scenario) -> tuple[Any, NavigateParams]:
     cmd = _command(scenario)
     nav = NavigationParams(robot_radius_m=cmd.robot_radius_m, goal_tolerance_m=cmd.goal_tolerance_m)
     state = navigation_init(_grid(scenario), scenario.initial_poses, np.array(cmd.goals_m), nav)
-    return state, NavigateParams(nav, scenario.robot, _bearings(scenario))
+    zero = np.zeros(scenario.n_robots)
+    return NavigateState(state, zero, zero, 0.0), NavigateParams(
+        nav, scenario.robot, reading_bearings(scenario)
+    )
 
 
 def navigate_decide(
-    state: Any, inputs: DecideInputs, params: NavigateParams, dt_s: float
-) -> tuple[Any, WheelCommand]:
+    state: NavigateState, inputs: DecideInputs, params: NavigateParams, dt_s: float
+) -> tuple[NavigateState, WheelCommand]:
     """The team's decision at a tick: the navigation controller's (v, omega) as wheel
     references, from the pose estimate, the range readings and the teammates' positions.
 
     Parameters
     ----------
-    state : NavigationState
-        The navigation controller's state.
+    state : NavigateState
+        The navigation controller's state and the command it holds.
     inputs : DecideInputs
         ``pose_estimate`` (N, 3), the range readings, and the inbox's ``xy_m`` (N, 2):
         the positions the team broadcast at the last tick.
@@ -282,7 +324,7 @@ def navigate_decide(
 
     Returns
     -------
-    state : NavigationState
+    state : NavigateState
     command : WheelCommand
         Wheel references (N, 2) [rad/s]; ``done`` once no robot is under way.
     """
@@ -297,9 +339,16 @@ def navigate_decide(
         for name, bearings in params.bearings_rad.items()
         if name in inputs.readings
     }
-    nav_inputs = NavigationInputs(pose=pose, ranges=ranges, teammates_xy_m=teammates, t_s=inputs.t_s)
-    state, v, omega = navigation_step(state, nav_inputs, params.navigation, dt_s)
-    status = tuple(state.status)
+    if inputs.t_s >= state.next_s - 1e-9:
+        nav_inputs = NavigationInputs(
+            pose=pose, ranges=ranges, teammates_xy_m=teammates, t_s=inputs.t_s
+        )
+        nav, v, omega = navigation_step(
+            state.navigation, nav_inputs, params.navigation, params.period_s
+        )
+        state = NavigateState(nav, v, omega, state.next_s + params.period_s)
+    v, omega = state.v_m_s, state.omega_rad_s
+    status = tuple(state.navigation.status)
     series: dict[str, FloatArray] = {
         "v_ref_m_s": np.asarray(v, dtype=float),
         "omega_ref_rad_s": np.asarray(omega, dtype=float),
