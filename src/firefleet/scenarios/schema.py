@@ -235,10 +235,20 @@ def _suggest(word: str, choices: typing.Iterable[str]) -> str:
     return f"; did you mean {close[0]!r}?" if close else ""
 
 
+def _optional(tp: Any) -> Any:
+    """``X`` for ``X | None`` (an optional section such as ``world``), else ``tp``."""
+    if typing.get_origin(tp) in (types.UnionType, typing.Union):
+        members = [m for m in typing.get_args(tp) if m is not type(None)]
+        if len(members) == 1:
+            return members[0]
+    return tp
+
+
 def _type_at(root: Any, loc: tuple[int | str, ...]) -> Any:
     """The declared type at ``loc`` below ``root`` (None where it cannot be told)."""
     tp = root
     for key in loc:
+        tp = _optional(tp)
         origin = typing.get_origin(tp)
         if origin is Annotated:
             tp = typing.get_args(tp)[0]
@@ -263,7 +273,7 @@ def _type_at(root: Any, loc: tuple[int | str, ...]) -> Any:
             tp = args[0] if len(args) == 2 and args[1] is Ellipsis else args[key]
         else:
             return None
-    return tp
+    return _optional(tp)
 
 
 def _where(loc: tuple[int | str, ...]) -> str:
@@ -426,4 +436,9 @@ def read_scenario_file(path: str | Path) -> Scenario:
         raise InputError(f"{p}: {exc}") from None
     except yaml.YAMLError as exc:
         raise InputError(f"{p}: not valid YAML: {exc}".replace("\n", " ")) from None
+    world = data.get("world") if isinstance(data, dict) else None
+    if isinstance(world, dict) and isinstance(world.get("map"), str):
+        where = Path(world["map"])  # a map file relative to the scenario's folder
+        if where.suffix.lower() in (".yaml", ".yml") and not where.is_absolute():
+            data["world"] = {**world, "map": str(p.parent / where)}
     return parse_scenario(data, origin=str(p))
