@@ -59,16 +59,16 @@ def _error(change: Any) -> str:
             "world.map: unknown map 'ofice'; did you mean 'office'",
         ),
         (
-            lambda d: d.update(poses=[[5.0, 2.0, 0.0], [1.0, 3.0, 0.0]]),
-            "poses[0]: (5, 2) is inside a wall",
+            lambda d: d.update(poses=[[4.0, 2.0, 0.0], [1.0, 3.0, 0.0]]),
+            "poses[0]: (4, 2) is inside a wall",
         ),
         (
             lambda d: d.update(poses=[[1.0, 1.0, 0.0], [-3.0, 3.0, 0.0]]),
             "poses[1]: (-3, 3) is off the map",
         ),
         (
-            lambda d: d["command"].update(goals_m=[[18.0, 7.0], [10.0, 2.0]]),
-            "command.goals_m[1]: (10, 2) is inside a wall",
+            lambda d: d["command"].update(goals_m=[[18.0, 7.0], [9.0, 2.0]]),
+            "command.goals_m[1]: (9, 2) is inside a wall",
         ),
         (
             lambda d: d["command"].update(goals_m=[[18.0, 70.0], [18.0, 2.0]]),
