@@ -36,9 +36,12 @@ BASE: dict[str, Any] = {
 
 def test_the_issues_example_parses() -> None:
     s = parse_scenario(copy.deepcopy(BASE))
-    assert s.world is not None and s.world.map == "office"
-    assert s.sensors is not None and s.sensors.lidar is not None
-    assert s.sensors.lidar.beams == 90 and s.sensors.ultrasonic is not None
+    assert s.world is not None
+    assert s.world.map == "office"
+    assert s.sensors is not None
+    assert s.sensors.lidar is not None
+    assert s.sensors.lidar.beams == 90
+    assert s.sensors.ultrasonic is not None
     assert s.command.kind == "navigate"
     assert s.command.goals_m == ((18.0, 7.0), (18.0, 2.0))
 
