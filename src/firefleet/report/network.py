@@ -225,7 +225,7 @@ def link_study_run(progress: Callable[[int, int], None] | None = None) -> Report
             metric="breakdown_delay_s",
             op=">=",
             value=0.5,
-            source="firefleet: cooperation holds up to 500 ms of latency (the issue's range)",
+            source="firefleet: cooperation holds up to 500 ms of latency",
         ),
     )
     if math.isfinite(breakdown):
