@@ -30,7 +30,6 @@ two agree).
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -42,6 +41,7 @@ from numpy.typing import NDArray
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 from firefleet.scenarios.schema import MotorFault, Scenario
+from firefleet.sim._link_stage import IdealLink, Link, link_impaired
 from firefleet.sim.drive import (
     DriveStack,
     DriveState,
@@ -165,37 +165,6 @@ class Sensors(Protocol):
     """The sensors of the loop: readings by name from the world and the true state."""
 
     def read(self, world: WorldState, drive: DriveState) -> Messages: ...
-
-
-@dataclass(frozen=True)
-class IdealLink:
-    """Every message arrives, unchanged, at the next tick."""
-
-    def init(self, n_robots: int, dt_s: float) -> None:
-        """Nothing to hold."""
-
-    def exchange(
-        self, state: None, sent: Messages, t_s: float, pose: FloatArray
-    ) -> tuple[Messages, None]:
-        """The messages delivered this tick: all those sent last tick."""
-        return sent, None
-
-    def counters(self, state: None) -> dict[str, float]:
-        """No counters: the ideal link loses nothing."""
-        return {}
-
-
-class Link(Protocol):
-    """The link stage: the messages sent last tick, as the receivers hold them now
-    (:mod:`firefleet.sim.link` models a real radio)."""
-
-    def init(self, n_robots: int, dt_s: float) -> Any: ...
-
-    def exchange(
-        self, state: Any, sent: Messages, t_s: float, pose: FloatArray
-    ) -> tuple[Messages, Any]: ...
-
-    def counters(self, state: Any) -> dict[str, float]: ...
 
 
 @dataclass(frozen=True)
@@ -372,7 +341,7 @@ def default_stages(scenario: Scenario, decider: Decider) -> Stages:
     {'world': 'StaticWorld', 'sensors': 'NoSensors', 'link': 'IdealLink', 'estimation': 'Odometry'}
     """
     link: Link = IdealLink()
-    if _impaired(scenario):
+    if link_impaired(scenario):
         from firefleet.sim.link import LinkModel  # the link imports this module's types
 
         link = LinkModel.from_spec(scenario.link, seed=scenario.seed)
@@ -385,17 +354,6 @@ def default_stages(scenario: Scenario, decider: Decider) -> Stages:
         link=link,
         estimation=Odometry() if decider.uses_estimate else NoEstimation(),
     )
-
-
-def _impaired(scenario: Scenario) -> bool:
-    """Whether the scenario's link is anything but the ideal one."""
-    spec = scenario.link
-    if spec is None:
-        return False
-    given = dataclasses.asdict(spec)
-    given.pop("preset")
-    given.pop("timeout_s")
-    return spec.preset != "ideal" or any(v is not None for v in given.values())
 
 
 def chunk_bounds(n_steps: int) -> NDArray[np.int64]:
@@ -469,7 +427,7 @@ def run_loop(
     phase = encoder_phase(scenario.encoder, n, rng)
     # the fused loops run the ideal link; of them only path following's knows faults
     fault_free = not scenario.faults or scenario.command.kind == "path-following"
-    if fused is not None and stages is None and not _impaired(scenario) and fault_free:
+    if fused is not None and stages is None and not link_impaired(scenario) and fault_free:
         return fused(scenario, phase, rec_steps, progress)
 
     stg = stages if stages is not None else default_stages(scenario, decider)
