@@ -36,6 +36,8 @@ TOPICS = (
     "stereo",
     "slam",
     "gridslam",
+    "net",
+    "link",
 )
 ISSUE_12: tuple[tuple[str, h.Op, float], ...] = (
     ("motor.single.speedup_vs_python_control", ">=", 100.0),

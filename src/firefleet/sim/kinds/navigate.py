@@ -23,6 +23,7 @@ metrics (``goal_reached`` 0), never waited for.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,8 +44,8 @@ from firefleet.sim.loop import (
     OdometryState,
     Sensors,
     Stages,
-    StaticWorld,
     WheelCommand,
+    default_stages,
 )
 from firefleet.sim.registry import TaskKind
 from firefleet.sim.result import SimResult
@@ -231,8 +232,9 @@ def _localisation(scenario: Scenario, grid: OccupancyGrid, rng: np.random.Genera
 
 
 def navigate_stages(scenario: Scenario, decider: Decider, rng: np.random.Generator) -> Stages:
-    """The navigate kind's stages: the map, the range sensors, an ideal link, and the
-    localisation of ``command.localisation`` beside the odometry (:class:`Tracked`).
+    """The navigate kind's stages: the default world and link (:func:`default_stages`:
+    the load step, motor faults, the scenario's link), the range sensors on the map, and
+    the localisation of ``command.localisation`` beside the odometry (:class:`Tracked`).
 
     Examples
     --------
@@ -246,8 +248,8 @@ def navigate_stages(scenario: Scenario, decider: Decider, rng: np.random.Generat
     'Tracked'
     """
     grid = _grid(scenario)
-    return Stages(
-        world=StaticWorld(torque_n_m=scenario.load.torque_n_m, start_s=scenario.load.start_s),
+    return dataclasses.replace(
+        default_stages(scenario, decider),  # the world's load and faults, the link
         sensors=_sensors(scenario, grid, rng),
         estimation=Tracked(_localisation(scenario, grid, rng)),
     )
