@@ -180,7 +180,7 @@ def animation_gif(result: SimResult, *, frames: int = _FRAMES) -> bytes:
         _discs(ax, result.pose[k], cmd.robot_radius_m, colours)
         ax.set_title(f"{result.scenario.name}  t = {result.t[k]:.1f} s", fontsize=9)
         images.append(
-            Image.open(io.BytesIO(_png(fig, dpi=60))).convert(
+            Image.open(io.BytesIO(_png(fig, dpi=80))).convert(
                 "P", palette=Image.Palette.ADAPTIVE, colors=64
             )
         )
