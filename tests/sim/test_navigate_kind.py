@@ -171,3 +171,20 @@ def test_the_command_line_exits_1_on_an_unreachable_goal(tmp_path: Path) -> None
     bad = text.replace("[[10.0, 5.5]]", "[[8.0, 5.5]]")  # inside the wall at x = 8 m
     (tmp_path / "bad.yaml").write_text(bad, encoding="utf-8")
     assert main(["validate", str(tmp_path / "bad.yaml")]) == 2
+
+
+def test_a_bad_map_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _write_map(tmp_path, _random_rooms(11), "rooms")
+    path.write_text(path.read_text().replace("resolution: 0.05\n", ""), encoding="utf-8")
+    text = (
+        "name: bad\ntitle: t\nduration_s: 1.0\nposes: [[1.5, 1.5, 0.0]]\n"
+        "world: {map: rooms.yaml}\ncommand: {kind: navigate, goals_m: [[2.0, 2.0]]}\n"
+    )
+    (tmp_path / "bad.yaml").write_text(text, encoding="utf-8")
+    capsys.readouterr()
+    assert main(["run", str(tmp_path / "bad.yaml"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "rooms.yaml: key 'resolution' missing" in err
