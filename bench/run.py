@@ -27,7 +27,16 @@ import _harness as h
 from _topics import topic_result
 
 HERE = Path(__file__).resolve().parent
-TOPICS = ("motor", "path_following", "fuzzy", "formation", "thermal", "stereo", "slam")
+TOPICS = (
+    "motor",
+    "path_following",
+    "fuzzy",
+    "formation",
+    "thermal",
+    "stereo",
+    "slam",
+    "navigation",
+)
 ISSUE_12: tuple[tuple[str, h.Op, float], ...] = (
     ("motor.single.speedup_vs_python_control", ">=", 100.0),
     ("motor.team.n10000.steps_per_s", ">=", 3_000.0),

@@ -59,8 +59,8 @@ def build_costmap(
     grid: OccupancyGrid,
     inflation_m: float,
     *,
-    wall_weight: float = 4.0,
-    wall_decay_m: float = 0.25,
+    wall_weight: float = 1.0,
+    wall_decay_m: float = 0.2,
 ) -> Costmap:
     """Inflate a map by the robot's disc and price the cells near walls.
 
