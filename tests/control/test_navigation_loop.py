@@ -170,6 +170,22 @@ def test_four_robots_cross_one_doorway_without_collision_or_deadlock() -> None:
     assert r.arrival_s[0] <= r.arrival_s[3]
 
 
+def test_head_on_in_a_passage_only_one_fits_through() -> None:
+    # a 2 m long, 0.9 m wide passage: the lower-priority robot makes way, nobody deadlocks
+    occ = _walled(80, 200)
+    occ[:, 80:120] = True
+    occ[31:49, 80:120] = False
+    grid = OccupancyGrid(occ, ~occ, 0.05)
+    poses = np.array([[1.5, 2.0, 0.0], [8.5, 2.0, np.pi]])
+    goals = np.array([[8.5, 2.0], [1.5, 2.0]])
+    params = NavigationParams()
+    r = run(grid, poses, goals, params, 60.0)
+    assert r.state.status == ("arrived", "arrived")
+    assert r.min_wall_clearance_m.min() > 0.0
+    assert r.min_robot_clearance_m > 0.0
+    assert r.arrival_s[0] < r.arrival_s[1]  # robot 0 has the right of way
+
+
 def test_an_unreachable_goal_is_reported_and_the_robot_stays() -> None:
     occ = _walled(60, 60)
     occ[10:30, 10] = occ[10:30, 30] = occ[10, 10:31] = occ[30, 10:31] = True  # a closed room

@@ -11,8 +11,10 @@ Per robot, each control period::
                path's heading there: (v_ref, omega_ref)
     give way   a robot yields (v_ref = 0, it may still turn) to any teammate of higher
                priority (lower index) whose next ``yield_distance_m`` of path comes
-               within two radii + margin of its own next stretch, unless it already
-               stands in that teammate's way (then it clears out by going on)
+               within two radii + margin of its own next stretch; if it already stands
+               in that teammate's way (a narrow passage, head on), it makes way: it
+               drives to the nearest reachable spot at least two radii + margin from
+               the teammate's whole remaining path, then plans to its goal again
     safety     DWA (``_dwa``) picks the admissible command of the dynamic window
                (Table 2 motors at 12 V) nearest (v_ref, omega_ref), with a clearance
                bonus, against the sensed range points and the teammates' discs
@@ -183,6 +185,11 @@ class NavigationState:
         Re-plans in a row for lack of progress.
     replans : ndarray of int, shape (N,)
         Paths planned so far per robot (the first included).
+    target_m : ndarray, shape (N, 2)
+        Where each robot's current path leads [m]: its goal, or a spot out of a
+        teammate's way.
+    aside_of : ndarray of int, shape (N,)
+        The teammate a robot is making way for (-1: none).
     t_s : float
         Time of the last step [s].
     """
@@ -199,6 +206,8 @@ class NavigationState:
     stuck_count: IntArray
     replans: IntArray
     t_s: float
+    target_m: FloatArray
+    aside_of: IntArray
 
     @property
     def arrived(self) -> FloatArray:
@@ -315,4 +324,6 @@ def navigation_init(
         stuck_count=np.zeros(n, dtype=np.int64),
         replans=np.ones(n, dtype=np.int64),
         t_s=0.0,
+        target_m=g.copy(),
+        aside_of=np.full(n, -1, dtype=np.int64),
     )
