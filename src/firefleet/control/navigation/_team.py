@@ -103,8 +103,8 @@ class NavigationParams:
     goal_tolerance_m: float = 0.2
     lookahead_m: float = 0.6
     corner_radius_m: float = 0.5
-    wall_weight: float = 1.0
-    wall_decay_m: float = 0.2
+    wall_weight: float = 2.0
+    wall_decay_m: float = 0.1
     dwa: DwaParams = field(default_factory=DwaParams)
     stuck_time_s: float = 3.0
     stuck_progress_m: float = 0.1
