@@ -35,6 +35,7 @@ TOPICS = (
     "thermal",
     "stereo",
     "slam",
+    "gridslam",
     "navigation",
 )
 ISSUE_12: tuple[tuple[str, h.Op, float], ...] = (

@@ -18,6 +18,7 @@ LIBRARIES = (
     "firefleet.planning",
     "firefleet.perception",
     "firefleet.estimation",
+    "firefleet.world",
 )
 FORBIDDEN = ("firefleet.report", "firefleet.cli", "firefleet.outputs", "matplotlib")
 # Path.write_text / write_bytes, np.save, json.dump, mkdir: the command line's job

@@ -44,6 +44,14 @@ from firefleet.scenarios._commands import (
     VoltageStep,
     WheelSpeedStep,
 )
+from firefleet.scenarios._world import (
+    LidarSpec,
+    Navigate,
+    SensorsSpec,
+    UltrasonicSpec,
+    WorldSpec,
+    check_world,
+)
 
 __all__ = [
     "CircleObstacle",
@@ -51,12 +59,17 @@ __all__ = [
     "Command",
     "Formation",
     "LeaderPath",
+    "LidarSpec",
     "LoadStep",
+    "Navigate",
     "PathFollowing",
     "RobotFailure",
     "Scenario",
+    "SensorsSpec",
+    "UltrasonicSpec",
     "VoltageStep",
     "WheelSpeedStep",
+    "WorldSpec",
     "parse_scenario",
     "read_scenario_file",
 ]
@@ -111,6 +124,10 @@ class Scenario:
         Hardware and low-level control; defaults from the deliverable's Table 2.
     load : LoadStep
         Load torque on the wheel motors.
+    world : WorldSpec, optional
+        The building (a map); None: an empty plane.
+    sensors : SensorsSpec, optional
+        The range sensors each robot carries; None: none.
     reproduces : str
         The deliverable's figure(s) this scenario reproduces ("" for none).
     deliverable_says : str
@@ -138,6 +155,8 @@ class Scenario:
     encoder: EncoderParams = field(default_factory=EncoderParams)
     speed_pid: PidParams = field(default_factory=PidParams)
     load: LoadStep = field(default_factory=LoadStep)
+    world: WorldSpec | None = None
+    sensors: SensorsSpec | None = None
     reproduces: str = ""
     deliverable_says: str = ""
     claims: tuple[Claim, ...] = ()
@@ -166,6 +185,7 @@ class Scenario:
         if self.seed < 0:
             raise InputError(f"seed must be >= 0, got {self.seed}")
         self.command.check_team(self.n_robots, self.duration_s)  # each command's own rule
+        check_world(self.world, self.sensors, self.poses, self.command)
         known = _metric_names(self.command.kind)
         for claim in self.claims:
             if claim.metric not in known:
@@ -215,10 +235,20 @@ def _suggest(word: str, choices: typing.Iterable[str]) -> str:
     return f"; did you mean {close[0]!r}?" if close else ""
 
 
+def _optional(tp: Any) -> Any:
+    """``X`` for ``X | None`` (an optional section such as ``world``), else ``tp``."""
+    if typing.get_origin(tp) in (types.UnionType, typing.Union):
+        members = [m for m in typing.get_args(tp) if m is not type(None)]
+        if len(members) == 1:
+            return members[0]
+    return tp
+
+
 def _type_at(root: Any, loc: tuple[int | str, ...]) -> Any:
     """The declared type at ``loc`` below ``root`` (None where it cannot be told)."""
     tp = root
     for key in loc:
+        tp = _optional(tp)
         origin = typing.get_origin(tp)
         if origin is Annotated:
             tp = typing.get_args(tp)[0]
@@ -243,7 +273,7 @@ def _type_at(root: Any, loc: tuple[int | str, ...]) -> Any:
             tp = args[0] if len(args) == 2 and args[1] is Ellipsis else args[key]
         else:
             return None
-    return tp
+    return _optional(tp)
 
 
 def _where(loc: tuple[int | str, ...]) -> str:
@@ -406,4 +436,9 @@ def read_scenario_file(path: str | Path) -> Scenario:
         raise InputError(f"{p}: {exc}") from None
     except yaml.YAMLError as exc:
         raise InputError(f"{p}: not valid YAML: {exc}".replace("\n", " ")) from None
+    world = data.get("world") if isinstance(data, dict) else None
+    if isinstance(world, dict) and isinstance(world.get("map"), str):
+        where = Path(world["map"])  # a map file relative to the scenario's folder
+        if where.suffix.lower() in (".yaml", ".yml") and not where.is_absolute():
+            data["world"] = {**world, "map": str(p.parent / where)}
     return parse_scenario(data, origin=str(p))

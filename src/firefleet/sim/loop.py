@@ -30,6 +30,7 @@ two agree).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -65,6 +66,7 @@ __all__ = [
     "ProgressCallback",
     "Recording",
     "Stages",
+    "StagesFactory",
     "StaticWorld",
     "TruePose",
     "WheelCommand",
@@ -174,8 +176,10 @@ class Odometry:
         """The estimate at the start: the true start poses."""
         return OdometryState(pose=pose.copy(), counts=drive.encoder.history[-1])
 
-    def step(self, state: OdometryState, drive: DriveState, stack: DriveStack) -> OdometryState:
-        """The estimate moved by the counts since its last update."""
+    def step(
+        self, state: OdometryState, drive: DriveState, stack: DriveStack, readings: Messages
+    ) -> OdometryState:
+        """The estimate moved by the counts since its last update (readings unused)."""
         counts = drive.encoder.history[-1]
         return OdometryState(
             pose=dead_reckoning(state.pose, state.counts, counts, stack), counts=counts
@@ -193,7 +197,7 @@ class NoEstimation:
     def init(self, pose: FloatArray, drive: DriveState) -> None:
         """Nothing to hold."""
 
-    def step(self, state: None, drive: DriveState, stack: DriveStack) -> None:
+    def step(self, state: None, drive: DriveState, stack: DriveStack, readings: Messages) -> None:
         """Nothing to update."""
 
     def pose(self, state: None) -> FloatArray | None:
@@ -202,11 +206,12 @@ class NoEstimation:
 
 
 class Estimation(Protocol):
-    """A pose estimator of the loop."""
+    """A pose estimator of the loop; ``step`` gets the readings the sensors stage gave
+    this tick, by name."""
 
     def init(self, pose: FloatArray, drive: DriveState) -> Any: ...
 
-    def step(self, state: Any, drive: DriveState, stack: DriveStack) -> Any: ...
+    def step(self, state: Any, drive: DriveState, stack: DriveStack, readings: Messages) -> Any: ...
 
     def pose(self, state: Any) -> FloatArray | None: ...
 
@@ -274,12 +279,16 @@ class WheelCommand:
         under (``result.extra``), robot axis first.
     outbox : mapping of str to ndarray
         Messages to the team, delivered by the link at the next tick.
+    done : bool
+        The task is over (every robot arrived): the loop records this tick and stops
+        before ``n_steps``.
     """
 
     reference_rad_s: FloatArray
     voltage_v: FloatArray | None = None
     series: Messages = field(default_factory=dict)
     outbox: Messages = field(default_factory=dict)
+    done: bool = False
 
 
 DecideStep = Callable[[Any, DecideInputs, Any, float], tuple[Any, WheelCommand]]
@@ -315,6 +324,11 @@ FusedRun = Callable[[Scenario, FloatArray, NDArray[np.int64], "ProgressCallback 
 """``result = fused(scenario, encoder_phase_rad, rec_steps, progress)``: a kind's compiled
 loop for the default stages, from the encoders' phases (N, 2) [rad] the loop drew, the
 ticks to record, and a progress callback to call between its chunks of ticks."""
+
+
+StagesFactory = Callable[[Scenario, Decider, np.random.Generator], Stages]
+"""``stages = make_stages(scenario, decider, rng)``: a kind's own stages (sensors, maps,
+filters), drawing their randomness from the run's generator ``rng``."""
 
 
 def default_stages(scenario: Scenario, decider: Decider) -> Stages:
@@ -358,6 +372,7 @@ def run_loop(
     *,
     fused: FusedRun | None = None,
     stages: Stages | None = None,
+    make_stages: StagesFactory | None = None,
     progress: ProgressCallback | None = None,
 ) -> SimResult:
     """Run a scenario on the world loop.
@@ -374,6 +389,9 @@ def run_loop(
         defaults).
     stages : Stages, optional
         The stages; None: :func:`default_stages`.
+    make_stages : callable, optional
+        Builds the stages from the run's generator (:data:`StagesFactory`), after the
+        encoders' phases are drawn; instead of ``stages``.
     progress : callable, optional
         ``progress(done, total)`` after each chunk.
 
@@ -406,6 +424,8 @@ def run_loop(
     if steps[0] < 0:
         raise InputError(f"rec_steps must be >= 0, got {steps[0]}")
     phase = encoder_phase(scenario.encoder, n, rng)
+    if make_stages is not None:
+        stages = make_stages(scenario, decider, rng)
     if fused is not None and stages is None:
         return fused(scenario, phase, rec_steps, progress)
 
@@ -428,7 +448,11 @@ def run_loop(
         current_a=rec.current_a,
         voltage_v=rec.voltage_v,
         load_torque_n_m=rec.load_torque_n_m,
-        extra={name: rec.series[name] for name in decider.series},
+        extra={
+            **{name: rec.series[name] for name in decider.series if name in rec.series},
+            **{name: v for name, v in rec.series.items() if name not in decider.series},
+            **rec.final,
+        },
     )
 
 
@@ -446,7 +470,10 @@ class Recording:
 voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
         The wheel stack's quantities (as :class:`~firefleet.sim.result.SimResult`).
     series : dict of str to ndarray
-        The decision's series by name, time first.
+        The decision's series (and the estimator's, if it has ``series(state)``) by
+        name, time first.
+    final : dict of str to ndarray
+        What the estimator gives at the end (``final(state)``, if it has one: a map).
     """
 
     t_s: FloatArray
@@ -458,6 +485,7 @@ voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
     voltage_v: FloatArray
     load_torque_n_m: FloatArray
     series: dict[str, FloatArray]
+    final: dict[str, FloatArray] = field(default_factory=dict)
 
 
 def run_staged(
@@ -521,6 +549,7 @@ def run_staged(
     estimate = stages.estimation.init(drive.pose, drive)
     sent: Messages = {}
     rec = _Recorder(rec_steps, n)
+    estimation_series = getattr(stages.estimation, "series", None)
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         for k in range(int(k0), int(k1)):
             t = k * dt
@@ -528,23 +557,30 @@ def run_staged(
             readings = stages.sensors.read(world, drive)
             inbox = stages.link.exchange(sent)
             if k > 0:  # the encoders have counted since the last tick
-                estimate = stages.estimation.step(estimate, drive, stack)
+                estimate = stages.estimation.step(estimate, drive, stack, readings)
             inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
             state, command = decide(state, inputs, params, dt)
+            if estimation_series is not None:  # the estimator's own quantities
+                command = dataclasses.replace(
+                    command, series={**command.series, **estimation_series(estimate)}
+                )
             sent = command.outbox
             if command.voltage_v is None:
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
             else:
                 voltage = command.voltage_v
-            rec.record(k, drive, command, voltage, world)
-            if k == n_steps:
+            rec.record(k, drive, command, voltage, world, force=command.done)
+            if k == n_steps or command.done:
                 break
             drive = drive_step(
                 drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
             )
         if progress is not None:
-            progress(min(int(k1), n_steps), n_steps)
-    return rec.recording(dt)
+            progress(n_steps if command.done else min(int(k1), n_steps), n_steps)
+        if command.done:
+            break
+    final = getattr(stages.estimation, "final", None)
+    return rec.recording(dt, final(estimate) if final is not None else {})
 
 
 class _Recorder:
@@ -552,6 +588,7 @@ class _Recorder:
 
     def __init__(self, rec_steps: NDArray[np.int64], n_robots: int) -> None:
         self.rec_steps = rec_steps
+        self.recorded: list[int] = []
         self.row = 0
         size = rec_steps.size
         self.pose = np.empty((size, n_robots, 3))
@@ -568,10 +605,14 @@ class _Recorder:
         command: WheelCommand,
         voltage: FloatArray,
         world: WorldState,
+        *,
+        force: bool = False,
     ) -> None:
+        """Record tick ``k`` if it is the next to record (or ``force``: the last)."""
         row = self.row
-        if row >= self.rec_steps.size or self.rec_steps[row] != k:
+        if row >= self.rec_steps.size or (self.rec_steps[row] != k and not force):
             return
+        self.recorded.append(k)
         self.pose[row] = drive.pose
         self.wheel["speed"][row] = drive.speed_rad_s
         self.wheel["measured"][row] = drive.measured_rad_s
@@ -585,15 +626,18 @@ class _Recorder:
             self.series[name][row] = value
         self.row += 1
 
-    def recording(self, dt_s: float) -> Recording:
+    def recording(self, dt_s: float, final: Messages) -> Recording:
+        """The samples recorded (fewer than planned if the task ended early)."""
+        m = self.row
         return Recording(
-            t_s=np.asarray(self.rec_steps * dt_s, dtype=np.float64),
-            pose=self.pose,
-            wheel_speed_rad_s=self.wheel["speed"],
-            wheel_speed_measured_rad_s=self.wheel["measured"],
-            wheel_speed_ref_rad_s=self.wheel["ref"],
-            current_a=self.wheel["current"],
-            voltage_v=self.wheel["voltage"],
-            load_torque_n_m=self.wheel["load"],
-            series=self.series,
+            t_s=np.asarray(np.array(self.recorded, dtype=np.int64) * dt_s, dtype=np.float64),
+            pose=self.pose[:m],
+            wheel_speed_rad_s=self.wheel["speed"][:m],
+            wheel_speed_measured_rad_s=self.wheel["measured"][:m],
+            wheel_speed_ref_rad_s=self.wheel["ref"][:m],
+            current_a=self.wheel["current"][:m],
+            voltage_v=self.wheel["voltage"][:m],
+            load_torque_n_m=self.wheel["load"][:m],
+            series={name: value[:m] for name, value in self.series.items()},
+            final=dict(final),
         )
