@@ -49,6 +49,32 @@ def _range_points(inputs: NavigationInputs, pose: FloatArray, reach_m: float) ->
     return np.concatenate(blocks, axis=1)
 
 
+_MAX_WALL_POINTS = 400
+"""Most known wall cells given to DWA per robot (the nearest)."""
+
+
+def _near_walls(
+    state: NavigationState, pose: FloatArray, reach_m: float
+) -> tuple[FloatArray, float]:
+    """The known wall cells within reach of each robot (N, M, 2), padded far, and the
+    radius of the disc covering a cell [m]."""
+    n = pose.shape[0]
+    pts = state.wall_points_m
+    radius = state.costmap.grid.resolution_m * math.sqrt(0.5)
+    if len(pts) == 0:
+        return np.full((n, 1, 2), _FAR), radius
+    out = np.full((n, _MAX_WALL_POINTS, 2), _FAR)
+    used = 1
+    for i in range(n):
+        d = np.hypot(pts[:, 0] - pose[i, 0], pts[:, 1] - pose[i, 1])
+        near = np.nonzero(d <= reach_m)[0]
+        if len(near) > _MAX_WALL_POINTS:
+            near = near[np.argpartition(d[near], _MAX_WALL_POINTS - 1)[:_MAX_WALL_POINTS]]
+        out[i, : len(near)] = pts[near]
+        used = max(used, len(near))
+    return out[:, :used], radius
+
+
 def _conflict(
     mine: FloatArray, theirs: FloatArray, me: FloatArray, gap_m: float
 ) -> tuple[bool, bool]:
@@ -178,7 +204,8 @@ def navigation_step(
     for i in range(n):
         if status[i] == "arrived":
             continue
-        if math.hypot(*(pose[i, :2] - state.goals_m[i])) <= params.goal_tolerance_m:
+        # half the tolerance: the estimate the decision uses may be off by a few cm
+        if math.hypot(*(pose[i, :2] - state.goals_m[i])) <= 0.5 * params.goal_tolerance_m:
             status[i] = "arrived"
             continue
         if aside[i] >= 0 and (
@@ -268,9 +295,15 @@ def navigation_step(
     points = _range_points(inputs, pose, reach)
     mate_pts = np.broadcast_to(mates[None], (n, n, 2)).copy()
     mate_pts[np.arange(n), np.arange(n)] = _FAR
-    obstacles = np.concatenate([points, mate_pts], axis=1)
+    walls, wall_radius = _near_walls(state, pose, reach)
+    obstacles = np.concatenate([points, walls, mate_pts], axis=1)
     radii = np.concatenate(
-        [np.zeros(points.shape[:2]), np.full((n, n), params.robot_radius_m)], axis=1
+        [
+            np.zeros(points.shape[:2]),
+            np.full(walls.shape[:2], wall_radius),
+            np.full((n, n), params.robot_radius_m),
+        ],
+        axis=1,
     )
     v, w, _ = dwa_command(
         pose, state.command, np.stack([v_ref, w_ref], axis=1), obstacles, radii, params.dwa, dt_s
