@@ -332,9 +332,7 @@ def _init(scenario: Scenario) -> tuple[Any, NavigateParams]:
     from firefleet.control.navigation import NavigationParams, navigation_init
 
     cmd = _command(scenario)
-    nav = NavigationParams(
-        robot_radius_m=cmd.robot_radius_m, goal_tolerance_m=cmd.goal_tolerance_m / 2.0
-    )
+    nav = NavigationParams(robot_radius_m=cmd.robot_radius_m, goal_tolerance_m=cmd.goal_tolerance_m)
     state = navigation_init(_grid(scenario), scenario.initial_poses, np.array(cmd.goals_m), nav)
     zero = np.zeros(scenario.n_robots)
     grid = _grid(scenario)
