@@ -1,4 +1,4 @@
-"""models, control, planning, perception and estimation are libraries: they import
+"""models, control, planning, perception, estimation and world are libraries: they import
 neither the report nor the command line, write no file a command line decides on, and
 keep each module small (a package of private modules past about 600 lines)."""
 

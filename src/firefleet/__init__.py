@@ -17,6 +17,7 @@ True
 from firefleet.errors import InputError
 from firefleet.scenarios import Scenario, builtin_names, load_scenario
 from firefleet.sim import SimResult, compute_metrics, simulate
+from firefleet.sweep import sweep
 
 __all__ = [
     "InputError",
@@ -26,6 +27,7 @@ __all__ = [
     "compute_metrics",
     "load_scenario",
     "simulate",
+    "sweep",
 ]
 
 __version__ = "0.1.0"

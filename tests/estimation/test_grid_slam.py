@@ -19,7 +19,7 @@ from firefleet.estimation.grid import (
     slam_step,
 )
 from firefleet.estimation.grid._rays import grid_frame
-from firefleet.estimation.grid._scanmatch import hill_climb, match_score
+from firefleet.estimation.grid._scanmatch import hill_climb, match_log_likelihood
 from tests.estimation.grid_world import cast, drive, odometry, office
 
 
@@ -47,8 +47,8 @@ def test_slam_beats_odometry_on_position_and_map(seed: int) -> None:
     slam_pct = map_agreement_pct(occupancy_probability(slam_map(state)), grid)
     dead_pct = map_agreement_pct(occupancy_probability(dead_map[0]), grid)
     slam_rms, dead_rms = rms(np.array(est), truth), rms(dead, truth)
-    # measured (seeds 1, 2): RMS 0.063 / 0.043 m against odometry's 0.26 / 0.11 m;
-    # map agreement 96.2 / 96.5 % against 92.1 / 92.4 %
+    # measured (seeds 1, 2): RMS 0.039 / 0.041 m against odometry's 0.26 / 0.11 m;
+    # map agreement 96.4 / 95.9 % against 92.1 / 92.4 %
     assert slam_rms < 0.1
     assert slam_rms < 0.7 * dead_rms
     assert slam_pct > 95.0
@@ -58,8 +58,8 @@ def test_slam_beats_odometry_on_position_and_map(seed: int) -> None:
 
 def test_scan_matcher_climbs_back_to_the_true_pose() -> None:
     """On the true map (as log odds), from 0.1 m and 0.05 rad off, the matcher returns to
-    within a cell of the truth, and its score there is the brute-force maximum over a
-    grid of poses around it."""
+    within a cell of the truth, its log likelihood there the brute-force maximum over a
+    grid of poses around it; a tight motion prior keeps it at the prior's centre."""
     grid = office(0.05)
     scanner = Scanner.ring(60, 360.0, 10.0)
     truth = np.array([6.0, 2.0, 0.3])
@@ -68,14 +68,31 @@ def test_scan_matcher_climbs_back_to_the_true_pose() -> None:
     ox, oy, res, _, _ = grid_frame(grid)
     inv2s2 = 0.5 / 0.05**2
     start = truth + np.array([0.1, -0.08, 0.05])
-    x, y, th, score = hill_climb(
-        log_odds, start, z, scanner.bearings_rad, ox, oy, res, 2, inv2s2, 0.05, 0.05, 5
+    x, y, th, objective = hill_climb(  # a flat motion prior: the likelihood's mode
+        log_odds,
+        start,
+        start,
+        z,
+        scanner.bearings_rad,
+        ox,
+        oy,
+        res,
+        2,
+        inv2s2,
+        0.9,
+        0.1,
+        1.0,
+        1e3,
+        1e3,
+        0.05,
+        0.05,
+        5,
     )
     assert np.hypot(x - truth[0], y - truth[1]) < 0.05
     assert abs(th - truth[2]) < 0.02
     offsets = np.linspace(-0.04, 0.04, 9)
     brute = max(
-        match_score(
+        match_log_likelihood(
             log_odds,
             truth[0] + dx,
             truth[1] + dy,
@@ -87,12 +104,36 @@ def test_scan_matcher_climbs_back_to_the_true_pose() -> None:
             res,
             2,
             inv2s2,
+            0.9,
+            0.1,
         )
         for dx in offsets
         for dy in offsets
         for dth in offsets / 2
     )
-    assert score >= 0.97 * brute
+    assert objective >= brute - 0.5  # within 0.5 nat of the brute-force maximum
+    # a tight motion prior holds the match at its centre
+    x2, y2, _, _ = hill_climb(
+        log_odds,
+        start,
+        start,
+        z,
+        scanner.bearings_rad,
+        ox,
+        oy,
+        res,
+        2,
+        inv2s2,
+        0.9,
+        0.1,
+        1.0,
+        1e-4,
+        1e-4,
+        0.05,
+        0.05,
+        5,
+    )
+    assert np.hypot(x2 - start[0], y2 - start[1]) < 0.005
 
 
 def test_slam_input_errors() -> None:

@@ -83,7 +83,9 @@ def test_mapping_stage_builds_the_map_at_the_true_poses() -> None:
 
 def test_mcl_stage_localises_globally() -> None:
     grid = office(0.05)
-    stage = MclEstimation(grid, SCANNER, params=GridMclParams(n_particles=8000), seed=3)
+    stage = MclEstimation(
+        grid, SCANNER, params=GridMclParams(n_particles=8000, min_particles=300), seed=3
+    )
     state, truth, est = run(stage)
     err = np.hypot(*(est[:, :2] - truth[:, :2]).T)
     assert err[0] > 0.3  # it did start from the uniform prior
@@ -117,6 +119,7 @@ def test_stages_plug_into_the_loop_and_need_their_reading() -> None:
     stages = Stages(world=StaticWorld(), sensors=lidar, estimation=MappingEstimation(grid, SCANNER))
     rec = run_staged(drive, stack, stages, decide, None, None, np.array([0, 50]), 50)
     np.testing.assert_allclose(rec.series["est"][-1], rec.pose[-1], atol=0.01)
+    assert stages.estimation.occupancy(rec.estimation_state).shape == grid.shape  # type: ignore[attr-defined]
     stages = Stages(world=StaticWorld(), estimation=MappingEstimation(grid, SCANNER))
     with pytest.raises(InputError, match="lidar_range_m"):
         run_staged(drive, stack, stages, decide, None, None, np.array([0, 50]), 50)

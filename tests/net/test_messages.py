@@ -274,3 +274,35 @@ def test_transport_config_is_loopback_peer_without_multicast() -> None:
     assert keys.state(3) == "firefleet/ffffffffffffffff/robot/3/state"
     assert robot_of_key(keys.alive(41)) == 41
     assert robot_of_key(keys.progress) is None
+
+
+def test_team_inbox_leaves_a_dead_robot_out_of_the_coordination() -> None:
+    """The relayed broadcast as the coordination reads it: all fresh, the in-process
+    ideal link's vectors; a robot whose process is gone, an age of +inf, so the slowest
+    progress heard (control.coordination.heard_minimum) is the living robots'."""
+    import numpy as np
+
+    from firefleet.control.coordination import heard_minimum
+    from firefleet.net.robot import DecisionLayout, team_inbox
+
+    layout = DecisionLayout(series=(), outbox=(("zeta", ()), ("zeta_rate", ())))
+    values = (10.0, 1.0, 4.0, 0.5, 9.0, 2.0)  # (zeta, rate) of robots 1, 2, 3
+    dt = 0.01
+    fresh = TeamProgress(1, PLANT, 7, width=2, values=values, age_s=(dt,) * 3, alive=(True,) * 3)
+    ideal = team_inbox(fresh, layout, dt)
+    assert ideal["zeta"].tolist() == [10.0, 4.0, 9.0]
+    assert ideal["zeta_rate"].tolist() == [1.0, 0.5, 2.0]
+    gone = TeamProgress(
+        1, PLANT, 7, width=2, values=values, age_s=(dt,) * 3, alive=(True, False, True)
+    )
+    inbox = team_inbox(gone, layout, dt)
+    zmin, _, stale = heard_minimum(inbox["zeta"], inbox["zeta_rate"], inbox["zeta_age_s"], 1.0)
+    np.testing.assert_allclose(zmin, min(10.0 + 1.0 * dt, 9.0 + 2.0 * dt))
+    assert stale.tolist() == [1.0, 1.0, 1.0]
+    held = TeamProgress(
+        1, PLANT, 7, width=2, values=values, age_s=(dt, 0.05, dt), alive=(True,) * 3
+    )  # robot 2 missed four ticks: held, with its age
+    kept = team_inbox(held, layout, dt)
+    zmin_held, age_max, _ = heard_minimum(kept["zeta"], kept["zeta_rate"], kept["zeta_age_s"], 1.0)
+    np.testing.assert_allclose(zmin_held, 4.0 + 0.5 * 0.05)
+    np.testing.assert_allclose(age_max, 0.05)

@@ -5,7 +5,9 @@
     firefleet list
     firefleet run SCENARIO [--out DIR] [--seed N] [--no-plots]
     firefleet validate FILE...
-    firefleet reproduce [--out DIR]
+    firefleet reproduce [--out DIR] [--seeds A:B]
+    firefleet sweep SCENARIO [--seeds A:B] [--set KEY=V1,V2,...]... [--zip]
+                   [--workers N | --scheduler tcp://HOST:PORT] [--out DIR] [--no-plots]
     firefleet stereo LEFT RIGHT [--calib FILE | --uncalibrated | --rectified] [--out DIR]
     firefleet capture LEFT RIGHT --out DIR [--frames N] [--offset K] [--every K]
     firefleet fis FILE [--out DIR] [--fix NAME=VALUE ...]
@@ -31,7 +33,7 @@ from typing import NoReturn
 from rich.console import Console
 
 import firefleet
-from firefleet.cli import _fis, _run, _slam, _stereo, _team, _thermal
+from firefleet.cli import _fis, _run, _slam, _stereo, _sweep, _team, _thermal
 from firefleet.cli._console import EXIT_BAD_INPUT, EXIT_OK
 from firefleet.errors import InputError
 
@@ -56,7 +58,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"firefleet {firefleet.__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for group in (_run, _stereo, _fis, _thermal, _slam, _team):  # the order of the help
+    for group in (_run, _sweep, _stereo, _fis, _thermal, _slam, _team):  # the order of the help
         group.add_parsers(sub)
     for command in sub.choices.values():
         _say_defaults(command)

@@ -60,6 +60,12 @@ def add_parsers(sub: Any) -> None:
         help="real data for section 2.7 (thermal/*.npy, slam/victoria_park.txt) "
         "(default: $FIREFLEET_DATA, else ../shared/data beside a checkout)",
     )
+    reproduce.add_argument(
+        "--seeds",
+        metavar="A:B",
+        help="also run every experiment with seeds A to B-1 (on Dask, as `firefleet sweep`) "
+        "and report each claim's pass rate over them",
+    )
     reproduce.set_defaults(handler=cmd_reproduce)
 
 
@@ -151,6 +157,11 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     scenarios = [s for s in (load_scenario(n) for n in builtin_names()) if s.reproduces]
     scenarios.sort(key=lambda s: _figure_number(s.reproduces))
+    seeds = None
+    if args.seeds is not None:
+        from firefleet.sweep import parse_seeds
+
+        seeds = parse_seeds(args.seeds)
     dest = Path(args.out)
     entries: list[ReportEntry] = []
     record = run_record(args.command_line, seed=None)
@@ -172,10 +183,13 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
             )
             mark = "[green]ok" if all_passed(document) else "[red]CLAIM FAILED"
             out.print(f"{scn.name:<24} {mark}  {escape(scn.reproduces)}")
+        if seeds is not None:
+            from firefleet.cli._sweep import seed_pass_rates
+
+            entries = seed_pass_rates(entries, scenarios, seeds, args.seeds, stage, out, err)
         missing = _section_27(stage, entries, args, out, err)
         _section_25(stage, entries, out, err)
-        seeds = {s.name: s.seed for s in scenarios}
-        footer = report_footer(record, seeds)
+        footer = report_footer(record, {s.name: s.seed for s in scenarios})
         index = render_index(entries, version=firefleet.__version__, footer=footer, missing=missing)
         (stage / "index.html").write_text(index, encoding="utf-8")
     total = sum(len(e.document["claims"]) for e in entries)

@@ -42,6 +42,12 @@ class ReportEntry:
         Files inside ``folder`` the entry links to (the run's data).
     captions : mapping of str to str
         A caption for some of the figures, by file name.
+    pass_rates : mapping of str to (int, int)
+        Claim name and bound (``"rise_time_s < 0.2"``, as
+        :func:`firefleet.sweep.claim_key`) -> (runs in which it holds, runs) over seeds
+        (``firefleet reproduce --seeds``); empty for seed 0 alone.
+    seeds : str
+        The seeds of ``pass_rates`` as typed (``"0:20"``).
     """
 
     name: str
@@ -54,6 +60,8 @@ class ReportEntry:
     command: str = ""
     links: tuple[str, ...] = ("metrics.json", "result.npz")
     captions: Mapping[str, str] = field(default_factory=dict)
+    pass_rates: Mapping[str, tuple[int, int]] = field(default_factory=dict)
+    seeds: str = ""
 
 
 @dataclass(frozen=True)
@@ -203,6 +211,15 @@ def _cell(value: Any) -> str:
     return f"<span class=nw>{html.escape(format_value(value))}</span>"
 
 
+def _rate_cell(rate: tuple[int, int] | None) -> str:
+    """A claim's pass rate over seeds: ``passed / runs`` and the percentage."""
+    if rate is None or rate[1] == 0:
+        return "<td class=num>n/a</td>"
+    passed, runs = rate
+    kind = "pass" if passed == runs else "fail"
+    return f"<td class='num {kind}'>{passed}/{runs} ({100 * passed / runs:.0f} %)</td>"
+
+
 def _has_undefined(value: Any) -> bool:
     if isinstance(value, float):
         return math.isnan(value)
@@ -217,12 +234,15 @@ def _section(entry: ReportEntry, shown_at: dict[str, str]) -> str:
     claims = doc.get("claims", [])
     rows = "".join(
         "<tr><td>{}</td><td class=num>{}</td><td class=num>{}</td>"
-        "<td class={}>{}</td><td class=src>{}</td></tr>".format(
+        "<td class={}>{}</td>{}<td class=src>{}</td></tr>".format(
             esc(c["name"]),
             esc(str(c["expected"])),
             _cell(c["measured"]),
             "pass" if c["passed"] else "fail",
             "passed" if c["passed"] else "FAILED",
+            _rate_cell(entry.pass_rates.get(f"{c['name']} {c['expected']}"))
+            if entry.pass_rates
+            else "",
             esc(c.get("source", "")),
         )
         for c in claims
@@ -257,9 +277,10 @@ def _section(entry: ReportEntry, shown_at: dict[str, str]) -> str:
         f' &middot; <a href="{esc(entry.folder)}/{name}">{name}</a>'
         for name in map(esc, entry.links)
     )
+    rate_head = f"<th>holds over seeds {esc(entry.seeds)}</th>" if entry.pass_rates else ""
     claims_table = (
         "<div class=scroll><table><tr><th>claim</th><th>expected</th><th>measured</th>"
-        f"<th>result</th><th>where the bound comes from</th></tr>{rows}</table></div>"
+        f"<th>result</th>{rate_head}<th>where the bound comes from</th></tr>{rows}</table></div>"
         if claims
         else ""
     )

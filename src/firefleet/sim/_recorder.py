@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,6 +40,9 @@ voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
     link_series : tuple of str
         The names of the link's counters among ``series`` (T,): cumulative messages
         sent, lost, ... (:meth:`Link.counters`).
+    estimation_state : object
+        The estimation stage's state after the last tick (its maps and particles, for a
+        kind to record).
     """
 
     t_s: FloatArray
@@ -53,6 +56,7 @@ voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
     series: dict[str, FloatArray]
     final: dict[str, FloatArray] = field(default_factory=dict)
     link_series: tuple[str, ...] = ()
+    estimation_state: Any = None
 
 
 class Recorder:

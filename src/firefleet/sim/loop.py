@@ -575,4 +575,5 @@ def run_staged(
         if command.done:
             break
     final = getattr(stages.estimation, "final", None)
-    return rec.recording(dt, final(estimate) if final is not None else {})
+    recording = rec.recording(dt, final(estimate) if final is not None else {})
+    return dataclasses.replace(recording, estimation_state=estimate)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 
 import numpy as np
 from numba import njit
@@ -52,6 +53,23 @@ class LikelihoodField:
     distance_m: NDArray[np.float32]
     max_distance_m: float
     blocked: NDArray[np.bool_]
+    _tables: dict[tuple[float, float, float, float], NDArray[np.float64]] = dataclass_field(
+        default_factory=dict, repr=False
+    )
+
+    def log_table(
+        self, sigma_m: float, z_hit: float, z_rand: float, max_range_m: float
+    ) -> NDArray[np.float64]:
+        """Each cell's log likelihood of holding a beam's end, (H, W), computed once per
+        model and kept: ``log(z_hit N(d; 0, sigma^2) + z_rand / max_range)``."""
+        key = (float(sigma_m), float(z_hit), float(z_rand), float(max_range_m))
+        if key not in self._tables:
+            d = self.distance_m.astype(np.float64)
+            norm = z_hit / (np.sqrt(2.0 * np.pi) * sigma_m)
+            self._tables[key] = np.log(
+                norm * np.exp(-0.5 * (d / sigma_m) ** 2) + z_rand / max_range_m
+            )
+        return self._tables[key]
 
 
 def likelihood_field(grid: OccupancyGrid, max_distance_m: float = 2.0) -> LikelihoodField:
@@ -83,24 +101,19 @@ def scan_log_likelihood(
     poses: np.ndarray,
     ranges: np.ndarray,
     bearings: np.ndarray,
-    dist: np.ndarray,
+    table: np.ndarray,
     blocked: np.ndarray,
     ox: float,
     oy: float,
     res: float,
     max_range: float,
-    max_dist: float,
-    sigma: float,
-    z_hit: float,
-    z_rand: float,
+    off_map: float,
     out: np.ndarray,
 ) -> None:
-    """``out[p]`` = the scan's log likelihood at ``poses[p]`` (P, 3); ``blocked`` (H, W)
-    marks the cells a pose cannot be on."""
-    h, w = dist.shape
-    norm = z_hit / (math.sqrt(2.0 * math.pi) * sigma)
-    rand = z_rand / max_range
-    inv2s2 = 0.5 / (sigma * sigma)
+    """``out[p]`` = the scan's log likelihood at ``poses[p]`` (P, 3) from the per-cell
+    log likelihoods ``table`` (H, W) (``off_map`` for an end off the grid); ``blocked``
+    (H, W) marks the cells a pose cannot be on."""
+    h, w = table.shape
     for p in range(poses.shape[0]):
         x, y, th = poses[p, 0], poses[p, 1], poses[p, 2]
         r0, c0 = cell_rc(x, y, ox, oy, res, h)
@@ -114,8 +127,7 @@ def scan_log_likelihood(
                 continue
             a = th + bearings[b]
             r, c = cell_rc(x + z * math.cos(a), y + z * math.sin(a), ox, oy, res, h)
-            d = dist[r, c] if 0 <= r < h and 0 <= c < w else max_dist
-            total += math.log(norm * math.exp(-d * d * inv2s2) + rand)
+            total += table[r, c] if 0 <= r < h and 0 <= c < w else off_map
         out[p] = total
 
 
@@ -131,21 +143,26 @@ def field_log_likelihood(
 ) -> FloatArray:
     """Log likelihood (P,) of one scan (B,) at each pose (P, 3) (see the module notes)."""
     ox, oy, res, _, _ = grid_frame(field.grid)
+    table = field.log_table(sigma_m, z_hit, z_rand, max_range_m)
+    dmax = field.max_distance_m
+    off_map = float(
+        np.log(
+            z_hit / (np.sqrt(2 * np.pi) * sigma_m) * np.exp(-0.5 * (dmax / sigma_m) ** 2)
+            + z_rand / max_range_m
+        )
+    )
     out = np.empty(poses.shape[0])
     scan_log_likelihood(
         np.ascontiguousarray(poses, dtype=np.float64),
         np.ascontiguousarray(ranges_m, dtype=np.float64),
         np.ascontiguousarray(bearings_rad, dtype=np.float64),
-        field.distance_m,
+        table,
         field.blocked,
         ox,
         oy,
         res,
         max_range_m,
-        field.max_distance_m,
-        sigma_m,
-        z_hit,
-        z_rand,
+        off_map,
         out,
     )
     return out

@@ -1,14 +1,19 @@
 """The scan matcher of grid SLAM: hill climbing on a particle's own map (GMapping's
 ``ScanMatcher::optimize``, Grisetti et al. 2007, sec. IV).
 
-A pose's *score* is ``sum_b exp(-d_b^2 / (2 sigma^2))`` over the scan's returns, ``d_b``
-the distance from beam b's end point to the nearest occupied cell (log odds > 0) within
-``window`` cells of the end point's cell (a beam with none there adds 0). From the
-odometry's pose the matcher tries the six moves of ``step_m`` along x and y and
-``step_rad`` in heading, takes the best while it improves, and halves the steps when
-none does, ``refinements`` times. Its *log likelihood*, from which the particle's weight
-is updated, is ``sum_b log(z_hit exp(-d_b^2 / (2 sigma^2)) + z_rand)`` at the matched
-pose, with ``d_b`` capped at the window's reach.
+With ``d_b`` the distance from beam b's end point to the nearest occupied cell (log
+odds > 0) within ``window`` cells of the end point's cell, a pose's *log likelihood* is
+``sum_b log(z_hit exp(-d_b^2 / (2 sigma^2)) + z_rand)`` (``d_b`` capped at the window's
+reach) and its *score* ``sum_b exp(-d_b^2 / (2 sigma^2))`` (beams with no wall near
+adding 0; a match is accepted when the score is high enough).
+
+The matcher climbs to the mode of the proposal of Grisetti et al. (2007, eq. 8): the
+scan likelihood (tempered by the weight gain) times the odometry motion model, a
+Gaussian about the noise-free odometry pose. Without the motion term a featureless
+corridor lets the match slide along it, scan after scan. From the particle's odometry
+sample it tries the six moves of ``step_m`` along x and y and ``step_rad`` in heading,
+takes the best while it improves, and halves the steps when none does,
+``refinements`` times.
 """
 
 from __future__ import annotations
@@ -101,9 +106,12 @@ def match_log_likelihood(
 
 
 @njit(cache=True)
-def hill_climb(
+def _objective(
     log_odds: np.ndarray,
-    pose: np.ndarray,
+    x: float,
+    y: float,
+    th: float,
+    prior: np.ndarray,
     ranges: np.ndarray,
     bearings: np.ndarray,
     ox: float,
@@ -111,13 +119,66 @@ def hill_climb(
     res: float,
     window: int,
     inv2s2: float,
+    z_hit: float,
+    z_rand: float,
+    inv_gain: float,
+    inv_sxy2: float,
+    inv_sth2: float,
+) -> float:
+    """Tempered scan log likelihood plus the motion prior's log density (up to a constant)."""
+    ll: float = match_log_likelihood(
+        log_odds, x, y, th, ranges, bearings, ox, oy, res, window, inv2s2, z_hit, z_rand
+    )
+    dx, dy = x - prior[0], y - prior[1]
+    dth = math.atan2(math.sin(th - prior[2]), math.cos(th - prior[2]))
+    return float(ll * inv_gain - 0.5 * ((dx * dx + dy * dy) * inv_sxy2 + dth * dth * inv_sth2))
+
+
+@njit(cache=True)
+def hill_climb(
+    log_odds: np.ndarray,
+    pose: np.ndarray,
+    prior: np.ndarray,
+    ranges: np.ndarray,
+    bearings: np.ndarray,
+    ox: float,
+    oy: float,
+    res: float,
+    window: int,
+    inv2s2: float,
+    z_hit: float,
+    z_rand: float,
+    inv_gain: float,
+    sigma_xy: float,
+    sigma_th: float,
     step_m: float,
     step_rad: float,
     refinements: int,
 ) -> tuple[float, float, float, float]:
-    """The matched pose (x, y, th) and its score, from ``pose`` (3,)."""
+    """The matched pose (x, y, th) from ``pose`` (3,) and its objective: the mode of the
+    tempered scan likelihood times the motion prior ``N(prior, diag(sigma_xy^2,
+    sigma_xy^2, sigma_th^2))``."""
+    ixy, ith = 1.0 / (sigma_xy * sigma_xy), 1.0 / (sigma_th * sigma_th)
     x, y, th = pose[0], pose[1], pose[2]
-    best = match_score(log_odds, x, y, th, ranges, bearings, ox, oy, res, window, inv2s2)
+    best = _objective(
+        log_odds,
+        x,
+        y,
+        th,
+        prior,
+        ranges,
+        bearings,
+        ox,
+        oy,
+        res,
+        window,
+        inv2s2,
+        z_hit,
+        z_rand,
+        inv_gain,
+        ixy,
+        ith,
+    )
     lin, ang = step_m, step_rad
     level = 0
     while level <= refinements:
@@ -136,7 +197,25 @@ def hill_climb(
                 cth += ang
             else:
                 cth -= ang
-            s = match_score(log_odds, cx, cy, cth, ranges, bearings, ox, oy, res, window, inv2s2)
+            s = _objective(
+                log_odds,
+                cx,
+                cy,
+                cth,
+                prior,
+                ranges,
+                bearings,
+                ox,
+                oy,
+                res,
+                window,
+                inv2s2,
+                z_hit,
+                z_rand,
+                inv_gain,
+                ixy,
+                ith,
+            )
             if s > bs:
                 bx, by, bth, bs = cx, cy, cth, s
         if bs > best:
@@ -152,6 +231,7 @@ def hill_climb(
 def match_particles(
     maps: np.ndarray,
     poses: np.ndarray,
+    priors: np.ndarray,
     ranges: np.ndarray,
     bearings: np.ndarray,
     ox: float,
@@ -165,17 +245,22 @@ def match_particles(
     min_score: float,
     z_hit: float,
     z_rand: float,
+    inv_gain: float,
+    sigma_xy: float,
+    sigma_th: float,
     out_poses: np.ndarray,
     out_loglik: np.ndarray,
 ) -> None:
-    """Every particle's scan-matched pose (P, 3) on its own map (P, H, W), kept where
-    the match scores at least ``min_score`` (else the odometry's pose), and the scan's
-    log likelihood there (P,)."""
+    """Every particle's scan-matched pose (P, 3) on its own map (P, H, W), from its
+    odometry sample ``poses`` with the motion prior centred on ``priors`` (P, 3), kept
+    where the match scores at least ``min_score`` (else the sample), and the scan's log
+    likelihood there (P,)."""
     inv2s2 = 0.5 / (sigma * sigma)
     for p in range(poses.shape[0]):
-        x, y, th, s = hill_climb(
+        x, y, th, _ = hill_climb(
             maps[p],
             poses[p],
+            priors[p],
             ranges,
             bearings,
             ox,
@@ -183,10 +268,16 @@ def match_particles(
             res,
             window,
             inv2s2,
+            z_hit,
+            z_rand,
+            inv_gain,
+            sigma_xy,
+            sigma_th,
             step_m,
             step_rad,
             refinements,
         )
+        s = match_score(maps[p], x, y, th, ranges, bearings, ox, oy, res, window, inv2s2)
         if s < min_score:
             x, y, th = poses[p, 0], poses[p, 1], poses[p, 2]
         out_poses[p, 0] = x

@@ -7,8 +7,9 @@ frame grid). For each scan:
 1. every particle moves by the odometry increment with noise drawn per particle
    (:func:`._mcl.sample_motion`);
 2. the *proposal*: the pose is refined by scan matching against the particle's own map
-   (hill climbing, :mod:`._scanmatch`); a match scoring under ``min_score`` (an empty
-   or ambiguous map) keeps the odometry's sample;
+   (hill climbing to the mode of scan likelihood x motion model, :mod:`._scanmatch`);
+   a match scoring under ``min_score`` (an empty or ambiguous map) keeps the odometry's
+   sample;
 3. the weight is multiplied by the scan's likelihood at the matched pose, tempered by
    ``1 / weight_gain`` (GMapping's ``lgain``: the beams' errors are not independent,
    and untempered weights collapse the cloud in a few scans);
@@ -45,6 +46,7 @@ from firefleet.estimation.grid._mcl import GridMclParams, sample_motion
 from firefleet.estimation.grid._rays import grid_frame, scan_update
 from firefleet.estimation.grid._scanmatch import match_particles
 from firefleet.estimation.particle_filter import (
+    compose,
     effective_sample_size,
     low_variance_resample,
     normalise_log_weights,
@@ -211,13 +213,36 @@ def slam_step(
     Returns
     -------
     GridSlamState
+
+    Examples
+    --------
+    Standing still in a 4 m square room: the map fills in, the estimate stays put.
+
+    >>> import numpy as np
+    >>> from firefleet.estimation.grid import (GridSlamParams, Scanner, slam_estimate,
+    ...     slam_init, slam_map, slam_step)
+    >>> from firefleet.world import OccupancyGrid
+    >>> frame = OccupancyGrid(np.zeros((40, 40), bool), np.ones((40, 40), bool), 0.1)
+    >>> scanner = Scanner.ring(4, 360.0, 5.0)
+    >>> prm = GridSlamParams(n_particles=5)
+    >>> state = slam_init(frame, [2.0, 2.0, 0.0], prm)
+    >>> rng = np.random.default_rng(0)
+    >>> for _ in range(6):
+    ...     state = slam_step(state, np.zeros(3), np.full(4, 1.9), frame, scanner, prm, rng)
+    >>> bool(np.hypot(*(slam_estimate(state)[:2] - 2.0)) < 0.05), bool(slam_map(state)[19, 39] > 0)
+    (True, True)
     """
     d = as_float_array(delta, "delta", (3,))
     z = check_ranges(np.reshape(ranges_m, (1, -1)), scanner, 1)[0]
     if state.log_odds.shape[1:] != frame.shape:
         raise InputError(f"the state's maps {state.log_odds.shape[1:]} are not on {frame.shape}")
     n = state.poses.shape[0]
+    prior = compose(state.poses, d)  # the motion model's mean for each particle
     poses = sample_motion(state.poses, d, params.motion, rng)
+    dist = float(np.hypot(d[0], d[1]))
+    mo = params.motion
+    sigma_xy = mo.trans_per_m * dist + mo.floor_m
+    sigma_th = mo.rot_per_rad * abs(float(d[2])) + mo.rot_per_m * dist + mo.floor_rad
     log_w = state.log_weights
     ox, oy, res, _, _ = grid_frame(frame)
     use = np.unique(np.linspace(0, z.size - 1, min(z.size, params.max_beams)).round())
@@ -229,6 +254,7 @@ def slam_step(
         match_particles(
             state.log_odds,
             poses,
+            prior,
             np.ascontiguousarray(z[ret]),
             np.ascontiguousarray(scanner.bearings_rad[ret]),
             ox,
@@ -242,6 +268,9 @@ def slam_step(
             params.min_score_ratio * ret.size,
             params.z_hit,
             params.z_rand,
+            1.0 / params.weight_gain,
+            sigma_xy,
+            sigma_th,
             matched,
             loglik,
         )
