@@ -13,6 +13,7 @@ from firefleet.control.formation import FormationParams
 from firefleet.errors import InputError, check_fields
 from firefleet.planning.paths import PolynomialPath
 from firefleet.scenarios._claims import _STRICT
+from firefleet.scenarios._world import Navigate
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
@@ -284,5 +285,6 @@ class Formation:
 
 
 Command = Annotated[
-    VoltageStep | WheelSpeedStep | PathFollowing | Formation, pydantic.Field(discriminator="kind")
+    VoltageStep | WheelSpeedStep | PathFollowing | Formation | Navigate,
+    pydantic.Field(discriminator="kind"),
 ]

@@ -45,6 +45,14 @@ from firefleet.scenarios._commands import (
     WheelSpeedStep,
 )
 from firefleet.scenarios._network import LinkSpec, MotorFault
+from firefleet.scenarios._world import (
+    LidarSpec,
+    Navigate,
+    SensorsSpec,
+    UltrasonicSpec,
+    WorldSpec,
+    check_world,
+)
 
 __all__ = [
     "CircleObstacle",
@@ -52,14 +60,19 @@ __all__ = [
     "Command",
     "Formation",
     "LeaderPath",
+    "LidarSpec",
     "LinkSpec",
     "LoadStep",
     "MotorFault",
+    "Navigate",
     "PathFollowing",
     "RobotFailure",
     "Scenario",
+    "SensorsSpec",
+    "UltrasonicSpec",
     "VoltageStep",
     "WheelSpeedStep",
+    "WorldSpec",
     "parse_scenario",
     "read_scenario_file",
 ]
@@ -118,6 +131,10 @@ class Scenario:
         Motor faults (a robot's motors at a fraction of their voltage for a while).
     link : LinkSpec, optional
         The team's wireless link (``firefleet.sim.link``); None: ideal.
+    world : WorldSpec, optional
+        The building (a map); None: an empty plane.
+    sensors : SensorsSpec, optional
+        The range sensors each robot carries; None: none.
     reproduces : str
         The deliverable's figure(s) this scenario reproduces ("" for none).
     deliverable_says : str
@@ -147,6 +164,8 @@ class Scenario:
     load: LoadStep = field(default_factory=LoadStep)
     faults: tuple[MotorFault, ...] = ()
     link: LinkSpec | None = None
+    world: WorldSpec | None = None
+    sensors: SensorsSpec | None = None
     reproduces: str = ""
     deliverable_says: str = ""
     claims: tuple[Claim, ...] = ()
@@ -181,6 +200,7 @@ class Scenario:
                     "robot(s) (poses)"
                 )
         self.command.check_team(self.n_robots, self.duration_s)  # each command's own rule
+        check_world(self.world, self.sensors, self.poses, self.command)
         known = _metric_names(self.command.kind)
         for claim in self.claims:
             if claim.metric not in known:
@@ -230,10 +250,20 @@ def _suggest(word: str, choices: typing.Iterable[str]) -> str:
     return f"; did you mean {close[0]!r}?" if close else ""
 
 
+def _optional(tp: Any) -> Any:
+    """``X`` for ``X | None`` (an optional section such as ``world``), else ``tp``."""
+    if typing.get_origin(tp) in (types.UnionType, typing.Union):
+        members = [m for m in typing.get_args(tp) if m is not type(None)]
+        if len(members) == 1:
+            return members[0]
+    return tp
+
+
 def _type_at(root: Any, loc: tuple[int | str, ...]) -> Any:
     """The declared type at ``loc`` below ``root`` (None where it cannot be told)."""
     tp = root
     for key in loc:
+        tp = _optional(tp)
         origin = typing.get_origin(tp)
         if origin is Annotated:
             tp = typing.get_args(tp)[0]
@@ -258,7 +288,7 @@ def _type_at(root: Any, loc: tuple[int | str, ...]) -> Any:
             tp = args[0] if len(args) == 2 and args[1] is Ellipsis else args[key]
         else:
             return None
-    return tp
+    return _optional(tp)
 
 
 def _where(loc: tuple[int | str, ...]) -> str:
@@ -421,4 +451,9 @@ def read_scenario_file(path: str | Path) -> Scenario:
         raise InputError(f"{p}: {exc}") from None
     except yaml.YAMLError as exc:
         raise InputError(f"{p}: not valid YAML: {exc}".replace("\n", " ")) from None
+    world = data.get("world") if isinstance(data, dict) else None
+    if isinstance(world, dict) and isinstance(world.get("map"), str):
+        where = Path(world["map"])  # a map file relative to the scenario's folder
+        if where.suffix.lower() in (".yaml", ".yml") and not where.is_absolute():
+            data["world"] = {**world, "map": str(p.parent / where)}
     return parse_scenario(data, origin=str(p))

@@ -33,7 +33,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -42,6 +42,8 @@ from numpy.typing import NDArray
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 from firefleet.scenarios.schema import MotorFault, Scenario
+from firefleet.sim._link_stage import IdealLink, Link, link_impaired
+from firefleet.sim._recorder import Recorder, Recording
 from firefleet.sim.drive import (
     DriveStack,
     DriveState,
@@ -67,6 +69,7 @@ __all__ = [
     "ProgressCallback",
     "Recording",
     "Stages",
+    "StagesFactory",
     "StaticWorld",
     "TruePose",
     "WheelCommand",
@@ -165,37 +168,6 @@ class Sensors(Protocol):
     """The sensors of the loop: readings by name from the world and the true state."""
 
     def read(self, world: WorldState, drive: DriveState) -> Messages: ...
-
-
-@dataclass(frozen=True)
-class IdealLink:
-    """Every message arrives, unchanged, at the next tick."""
-
-    def init(self, n_robots: int, dt_s: float) -> None:
-        """Nothing to hold."""
-
-    def exchange(
-        self, state: None, sent: Messages, t_s: float, pose: FloatArray
-    ) -> tuple[Messages, None]:
-        """The messages delivered this tick: all those sent last tick."""
-        return sent, None
-
-    def counters(self, state: None) -> dict[str, float]:
-        """No counters: the ideal link loses nothing."""
-        return {}
-
-
-class Link(Protocol):
-    """The link stage: the messages sent last tick, as the receivers hold them now
-    (:mod:`firefleet.sim.link` models a real radio)."""
-
-    def init(self, n_robots: int, dt_s: float) -> Any: ...
-
-    def exchange(
-        self, state: Any, sent: Messages, t_s: float, pose: FloatArray
-    ) -> tuple[Messages, Any]: ...
-
-    def counters(self, state: Any) -> dict[str, float]: ...
 
 
 @dataclass(frozen=True)
@@ -317,12 +289,16 @@ class WheelCommand:
         under (``result.extra``), robot axis first.
     outbox : mapping of str to ndarray
         Messages to the team, delivered by the link at the next tick.
+    done : bool
+        The task is over (every robot arrived): the loop records this tick and stops
+        before ``n_steps``.
     """
 
     reference_rad_s: FloatArray
     voltage_v: FloatArray | None = None
     series: Messages = field(default_factory=dict)
     outbox: Messages = field(default_factory=dict)
+    done: bool = False
 
 
 DecideStep = Callable[[Any, DecideInputs, Any, float], tuple[Any, WheelCommand]]
@@ -360,6 +336,11 @@ loop for the default stages, from the encoders' phases (N, 2) [rad] the loop dre
 ticks to record, and a progress callback to call between its chunks of ticks."""
 
 
+StagesFactory = Callable[[Scenario, Decider, np.random.Generator], Stages]
+"""``stages = make_stages(scenario, decider, rng)``: a kind's own stages (sensors, maps,
+filters), drawing their randomness from the run's generator ``rng``."""
+
+
 def default_stages(scenario: Scenario, decider: Decider) -> Stages:
     """The stages a scenario runs with: static world with its load step, no sensors, an
     ideal link, and odometry if the kind uses a pose estimate.
@@ -375,7 +356,7 @@ def default_stages(scenario: Scenario, decider: Decider) -> Stages:
     {'world': 'StaticWorld', 'sensors': 'NoSensors', 'link': 'IdealLink', 'estimation': 'Odometry'}
     """
     link: Link = IdealLink()
-    if _impaired(scenario):
+    if link_impaired(scenario):
         from firefleet.sim.link import LinkModel  # the link imports this module's types
 
         link = LinkModel.from_spec(scenario.link, seed=scenario.seed)
@@ -388,17 +369,6 @@ def default_stages(scenario: Scenario, decider: Decider) -> Stages:
         link=link,
         estimation=Odometry() if decider.uses_estimate else NoEstimation(),
     )
-
-
-def _impaired(scenario: Scenario) -> bool:
-    """Whether the scenario's link is anything but the ideal one."""
-    spec = scenario.link
-    if spec is None:
-        return False
-    given = dataclasses.asdict(spec)
-    given.pop("preset")
-    given.pop("timeout_s")
-    return spec.preset != "ideal" or any(v is not None for v in given.values())
 
 
 def chunk_bounds(n_steps: int) -> NDArray[np.int64]:
@@ -422,6 +392,7 @@ def run_loop(
     *,
     fused: FusedRun | None = None,
     stages: Stages | None = None,
+    make_stages: StagesFactory | None = None,
     progress: ProgressCallback | None = None,
 ) -> SimResult:
     """Run a scenario on the world loop.
@@ -438,6 +409,9 @@ def run_loop(
         defaults).
     stages : Stages, optional
         The stages; None: :func:`default_stages`.
+    make_stages : callable, optional
+        Builds the stages from the run's generator (:data:`StagesFactory`), after the
+        encoders' phases are drawn; instead of ``stages``.
     progress : callable, optional
         ``progress(done, total)`` after each chunk.
 
@@ -470,9 +444,11 @@ def run_loop(
     if steps[0] < 0:
         raise InputError(f"rec_steps must be >= 0, got {steps[0]}")
     phase = encoder_phase(scenario.encoder, n, rng)
+    if make_stages is not None:
+        stages = make_stages(scenario, decider, rng)
     # the fused loops run the ideal link; of them only path following's knows faults
     fault_free = not scenario.faults or scenario.command.kind == "path-following"
-    if fused is not None and stages is None and not _impaired(scenario) and fault_free:
+    if fused is not None and stages is None and not link_impaired(scenario) and fault_free:
         return fused(scenario, phase, rec_steps, progress)
 
     stg = stages if stages is not None else default_stages(scenario, decider)
@@ -494,44 +470,12 @@ def run_loop(
         current_a=rec.current_a,
         voltage_v=rec.voltage_v,
         load_torque_n_m=rec.load_torque_n_m,
-        extra={name: rec.series[name] for name in (*decider.series, *rec.link_series)},
+        extra={
+            **{name: rec.series[name] for name in decider.series if name in rec.series},
+            **{name: v for name, v in rec.series.items() if name not in decider.series},
+            **rec.final,
+        },
     )
-
-
-@dataclass(frozen=True)
-class Recording:
-    """The samples of a staged run (T recorded ticks, N robots).
-
-    Attributes
-    ----------
-    t_s : ndarray, shape (T,)
-        Time [s].
-    pose : ndarray, shape (T, N, 3)
-        True poses.
-    wheel_speed_rad_s, wheel_speed_measured_rad_s, wheel_speed_ref_rad_s, current_a, \
-voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
-        The wheel stack's quantities (as :class:`~firefleet.sim.result.SimResult`).
-    series : dict of str to ndarray
-        The decision's series by name, time first (and the link's counters).
-    link_series : tuple of str
-        The names of the link's counters among ``series`` (T,): cumulative messages
-        sent, lost, ... (:meth:`Link.counters`).
-    estimation_state : object
-        The estimation stage's state after the last tick (its maps and particles, for a
-        kind to record).
-    """
-
-    t_s: FloatArray
-    pose: FloatArray
-    wheel_speed_rad_s: FloatArray
-    wheel_speed_measured_rad_s: FloatArray
-    wheel_speed_ref_rad_s: FloatArray
-    current_a: FloatArray
-    voltage_v: FloatArray
-    load_torque_n_m: FloatArray
-    series: dict[str, FloatArray]
-    link_series: tuple[str, ...] = ()
-    estimation_state: Any = None
 
 
 def run_staged(
@@ -595,7 +539,8 @@ def run_staged(
     estimate = stages.estimation.init(drive.pose, drive)
     sent: Messages = {}
     link = stages.link.init(n, dt)
-    rec = _Recorder(rec_steps, n)
+    rec = Recorder(rec_steps, n)
+    estimation_series = getattr(stages.estimation, "series", None)
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         for k in range(int(k0), int(k1)):
             t = k * dt
@@ -606,6 +551,10 @@ def run_staged(
                 estimate = stages.estimation.step(estimate, drive, stack, readings)
             inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
             state, command = decide(state, inputs, params, dt)
+            if estimation_series is not None:  # the estimator's own quantities
+                command = dataclasses.replace(
+                    command, series={**command.series, **estimation_series(estimate)}
+                )
             sent = command.outbox
             if command.voltage_v is None:
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
@@ -613,72 +562,18 @@ def run_staged(
                 voltage = command.voltage_v
             if world.voltage_scale is not None:  # a motor fault
                 voltage = voltage * world.voltage_scale[:, None]
-            rec.record(k, drive, command, voltage, world, stages.link.counters(link))
-            if k == n_steps:
+            rec.record(
+                k, drive, command, voltage, world, stages.link.counters(link), force=command.done
+            )
+            if k == n_steps or command.done:
                 break
             drive = drive_step(
                 drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
             )
         if progress is not None:
-            progress(min(int(k1), n_steps), n_steps)
-    return replace(rec.recording(dt), estimation_state=estimate)
-
-
-class _Recorder:
-    """The samples of a run, written at the ticks to record."""
-
-    def __init__(self, rec_steps: NDArray[np.int64], n_robots: int) -> None:
-        self.rec_steps = rec_steps
-        self.row = 0
-        size = rec_steps.size
-        self.pose = np.empty((size, n_robots, 3))
-        self.wheel = {
-            name: np.empty((size, n_robots, 2))
-            for name in ("speed", "measured", "ref", "current", "voltage", "load")
-        }
-        self.series: dict[str, FloatArray] = {}
-        self.link_series: list[str] = []
-
-    def record(
-        self,
-        k: int,
-        drive: DriveState,
-        command: WheelCommand,
-        voltage: FloatArray,
-        world: WorldState,
-        counters: Mapping[str, float],
-    ) -> None:
-        row = self.row
-        if row >= self.rec_steps.size or self.rec_steps[row] != k:
-            return
-        self.pose[row] = drive.pose
-        self.wheel["speed"][row] = drive.speed_rad_s
-        self.wheel["measured"][row] = drive.measured_rad_s
-        self.wheel["ref"][row] = command.reference_rad_s
-        self.wheel["current"][row] = drive.current_a
-        self.wheel["voltage"][row] = voltage
-        self.wheel["load"][row] = world.load_torque_n_m
-        for name, count in counters.items():
-            if name not in self.series:
-                self.series[name] = np.empty(self.rec_steps.size)
-                self.link_series.append(name)
-            self.series[name][row] = count
-        for name, value in command.series.items():
-            if name not in self.series:
-                self.series[name] = np.empty((self.rec_steps.size, *np.shape(value)))
-            self.series[name][row] = value
-        self.row += 1
-
-    def recording(self, dt_s: float) -> Recording:
-        return Recording(
-            t_s=np.asarray(self.rec_steps * dt_s, dtype=np.float64),
-            pose=self.pose,
-            wheel_speed_rad_s=self.wheel["speed"],
-            wheel_speed_measured_rad_s=self.wheel["measured"],
-            wheel_speed_ref_rad_s=self.wheel["ref"],
-            current_a=self.wheel["current"],
-            voltage_v=self.wheel["voltage"],
-            load_torque_n_m=self.wheel["load"],
-            series=self.series,
-            link_series=tuple(self.link_series),
-        )
+            progress(n_steps if command.done else min(int(k1), n_steps), n_steps)
+        if command.done:
+            break
+    final = getattr(stages.estimation, "final", None)
+    recording = rec.recording(dt, final(estimate) if final is not None else {})
+    return dataclasses.replace(recording, estimation_state=estimate)

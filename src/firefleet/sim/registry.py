@@ -36,7 +36,7 @@ from firefleet.errors import InputError
 
 if TYPE_CHECKING:
     from firefleet.scenarios.schema import Scenario
-    from firefleet.sim.loop import Decider, FusedRun, ProgressCallback
+    from firefleet.sim.loop import Decider, FusedRun, ProgressCallback, StagesFactory
     from firefleet.sim.result import SimResult
 
 __all__ = ["Metrics", "TaskKind", "kind_names", "register", "task_kind"]
@@ -70,6 +70,10 @@ class TaskKind:
     runner : callable, optional
         For a kind that runs its own loop instead of a ``decider`` (exactly one of the
         two): ``runner(scenario, rec_steps, progress) -> SimResult``.
+    stages : callable, optional
+        The kind's own stages (:data:`firefleet.sim.loop.StagesFactory`:
+        ``stages(scenario, decider, rng) -> Stages``), instead of
+        :func:`~firefleet.sim.loop.default_stages`; such a kind has no fused loop.
 
     Examples
     --------
@@ -86,12 +90,15 @@ class TaskKind:
     decider: Decider | None = None
     fused: FusedRun | None = None
     runner: Runner | None = None
+    stages: StagesFactory | None = None
 
     def __post_init__(self) -> None:
         if (self.decider is None) == (self.runner is None):
             raise InputError(f"task kind {self.name!r}: give a decider or a runner, not both")
         if self.fused is not None and self.decider is None:
             raise InputError(f"task kind {self.name!r}: a fused loop needs a decider")
+        if self.stages is not None and (self.decider is None or self.fused is not None):
+            raise InputError(f"task kind {self.name!r}: own stages need a decider, no fused loop")
 
     def run(
         self,
@@ -111,6 +118,10 @@ class TaskKind:
         from firefleet.sim.loop import default_stages, run_loop
 
         assert self.decider is not None  # __post_init__
+        if self.stages is not None:
+            return run_loop(
+                scenario, self.decider, rec_steps, make_stages=self.stages, progress=progress
+            )
         stages = default_stages(scenario, self.decider) if staged else None
         return run_loop(
             scenario, self.decider, rec_steps, fused=self.fused, stages=stages, progress=progress

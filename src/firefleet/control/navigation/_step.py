@@ -1,0 +1,336 @@
+"""One tick of team navigation (the stages are described in ``_team``)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from firefleet._typing import FloatArray
+from firefleet.control.navigation._dwa import dwa_command
+from firefleet.control.navigation._team import (
+    _SAMPLE_M,
+    NavigationInputs,
+    NavigationParams,
+    NavigationState,
+    _plan,
+    _samples,
+    _with_teammates,
+)
+from firefleet.control.path_following import controller_inputs
+from firefleet.errors import InputError, as_float_array
+
+__all__ = ["navigation_step"]
+
+_FAR = 1e9
+
+
+def _range_points(inputs: NavigationInputs, pose: FloatArray, reach_m: float) -> FloatArray:
+    """Every sensor's returns as world points (N, M, 2); no return or beyond reach: far."""
+    n = pose.shape[0]
+    blocks = []
+    for name, (ranges, bearings) in inputs.ranges.items():
+        r = np.asarray(ranges, dtype=float)
+        b = np.asarray(bearings, dtype=float)
+        if r.ndim != 2 or r.shape[0] != n:
+            raise InputError(f"ranges[{name!r}] must be (N, B) with N = {n}, got {r.shape}")
+        if b.shape not in ((r.shape[1],), r.shape):
+            raise InputError(
+                f"bearings of {name!r} must be (B,) or (N, B) with B = {r.shape[1]}, got {b.shape}"
+            )
+        ang = pose[:, 2:3] + np.broadcast_to(b, r.shape)
+        ok = np.isfinite(r) & (r <= reach_m)
+        rr = np.where(ok, r, 0.0)
+        pts = np.stack([pose[:, 0:1] + rr * np.cos(ang), pose[:, 1:2] + rr * np.sin(ang)], axis=-1)
+        blocks.append(np.where(ok[..., None], pts, _FAR))
+    if not blocks:
+        return np.full((n, 1, 2), _FAR)
+    return np.concatenate(blocks, axis=1)
+
+
+_MAX_WALL_POINTS = 400
+"""Most known wall cells given to DWA per robot (the nearest)."""
+
+
+def _near_walls(
+    state: NavigationState, pose: FloatArray, reach_m: float
+) -> tuple[FloatArray, float]:
+    """The known wall cells within reach of each robot (N, M, 2), padded far, and the
+    radius of the disc covering a cell [m]."""
+    n = pose.shape[0]
+    pts = state.wall_points_m
+    radius = state.costmap.grid.resolution_m * math.sqrt(0.5)
+    if len(pts) == 0:
+        return np.full((n, 1, 2), _FAR), radius
+    out = np.full((n, _MAX_WALL_POINTS, 2), _FAR)
+    used = 1
+    for i in range(n):
+        d = np.hypot(pts[:, 0] - pose[i, 0], pts[:, 1] - pose[i, 1])
+        near = np.nonzero(d <= reach_m)[0]
+        if len(near) > _MAX_WALL_POINTS:
+            near = near[np.argpartition(d[near], _MAX_WALL_POINTS - 1)[:_MAX_WALL_POINTS]]
+        out[i, : len(near)] = pts[near]
+        used = max(used, len(near))
+    return out[:, :used], radius
+
+
+def _conflict(
+    mine: FloatArray, theirs: FloatArray, me: FloatArray, gap_m: float
+) -> tuple[bool, bool]:
+    """(my path ahead meets theirs, I stand in their way)."""
+    d = np.hypot(mine[:, None, 0] - theirs[None, :, 0], mine[:, None, 1] - theirs[None, :, 1])
+    in_way = bool(np.min(np.hypot(theirs[:, 0] - me[0], theirs[:, 1] - me[1])) < gap_m)
+    return bool(d.min() < gap_m), in_way
+
+
+def _aside_spot(
+    state: NavigationState,
+    params: NavigationParams,
+    pose: FloatArray,
+    mates: FloatArray,
+    i: int,
+    j: int,
+    rest: FloatArray,
+    gap: float,
+) -> FloatArray | None:
+    """The nearest open spot (within 3 m of robot ``i``) that keeps ``gap`` + the goal
+    tolerance + 0.1 m (so a robot arrived near it is out of the way) from
+    teammate ``j``'s remaining path ``rest`` (K, 2) and from every other robot, and
+    that ``i`` can reach around ``j``; None if there is none."""
+    grid = state.costmap.grid
+    reach = round(3.0 / grid.resolution_m)
+    rc = grid.cell_of(pose[i, :2])
+    h, w = grid.shape
+    r0, r1 = max(rc[0] - reach, 0), min(rc[0] + reach + 1, h)
+    c0, c1 = max(rc[1] - reach, 0), min(rc[1] + reach + 1, w)
+    cells = np.argwhere(~state.costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
+    if len(cells) == 0:
+        return None
+    xy = grid.center_of(cells)
+    keep = np.ones(len(xy), dtype=bool)
+    for pts in (rest, np.delete(mates, i, axis=0)):
+        for chunk in np.array_split(pts, max(len(pts) // 64, 1)):
+            d = np.hypot(xy[:, None, 0] - chunk[None, :, 0], xy[:, None, 1] - chunk[None, :, 1])
+            keep &= d.min(axis=1) > gap + params.goal_tolerance_m + 0.1
+    xy = xy[keep]
+    if len(xy) == 0:
+        return None
+    order = np.argsort(np.hypot(xy[:, 0] - pose[i, 0], xy[:, 1] - pose[i, 1]))
+    costmap = _with_teammates(state, params, mates[j : j + 1])
+    # the nearest first, then farther ones (the nearest may lie behind a wall)
+    tries = dict.fromkeys([0, 1, *(int(f * (len(order) - 1)) for f in (0.05, 0.15, 0.3, 0.6))])
+    for k in tries:
+        spot = xy[order[k]]
+        status, _ = _plan(costmap, pose[i, :2], spot, params)
+        if status == "moving":
+            return np.asarray(spot)
+    return None
+
+
+def navigation_step(
+    state: NavigationState, inputs: NavigationInputs, params: NavigationParams, dt_s: float
+) -> tuple[NavigationState, FloatArray, FloatArray]:
+    """The team's velocity commands for one control period.
+
+    Parameters
+    ----------
+    state : NavigationState
+        From :func:`navigation_init` or the previous step.
+    inputs : NavigationInputs
+        Pose estimates, range readings with their bearings, teammates' positions, time.
+    params : NavigationParams
+    dt_s : float
+        The control period [s] (the dynamic window is what the wheels reach in it).
+
+    Returns
+    -------
+    state : NavigationState
+    v_m_s, omega_rad_s : ndarray, shape (N,)
+        Linear [m/s] and angular [rad/s] velocity set points (0 for robots that have
+        arrived or cannot move).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.world import OccupancyGrid
+    >>> from firefleet.control.navigation import (
+    ...     NavigationInputs, NavigationParams, navigation_init)
+    >>> occ = np.zeros((40, 60), dtype=bool)
+    >>> grid = OccupancyGrid(occ, ~occ, 0.1)
+    >>> params = NavigationParams()
+    >>> pose = np.array([[1.0, 2.0, 0.0]])
+    >>> state = navigation_init(grid, pose, [[5.0, 2.0]], params)
+    >>> inputs = NavigationInputs(pose, {}, pose[:, :2], 0.0)
+    >>> state, v, w = navigation_step(state, inputs, params, 0.1)
+    >>> bool(0.0 < v[0] <= 0.25), round(float(w[0]), 6), state.status  # 0.25 m/s in 0.1 s
+    (True, 0.0, ('moving',))
+    """
+    if not (math.isfinite(dt_s) and dt_s > 0.0):
+        raise InputError(f"dt_s must be > 0, got {dt_s!r}")
+    n = state.goals_m.shape[0]
+    pose = as_float_array(inputs.pose, "inputs.pose", (n, 3))
+    mates = as_float_array(inputs.teammates_xy_m, "inputs.teammates_xy_m", (n, 2))
+    t = float(inputs.t_s)
+    status = list(state.status)
+    paths = list(state.paths)
+    samples = list(state.samples)
+    progress = state.progress_m.copy()
+    best = state.best_progress_m.copy()
+    since = state.since_s.copy()
+    stuck = state.stuck_count.copy()
+    replans = state.replans.copy()
+    desired = pose.copy()
+    index = np.zeros(n, dtype=np.int64)
+    target = state.target_m.copy()
+    aside = state.aside_of.copy()
+
+    def replan(i: int, with_mates: bool) -> None:
+        costmap = state.costmap
+        if with_mates:
+            others = np.delete(mates, i, axis=0)
+            costmap = _with_teammates(state, params, others)
+        st, path = _plan(costmap, pose[i, :2], target[i], params)
+        if path is None and with_mates:
+            st, path = _plan(state.costmap, pose[i, :2], target[i], params)
+        status[i] = st if path is None else "moving"
+        paths[i] = path
+        samples[i] = _samples(path)
+        progress[i] = 0.0
+        best[i] = 0.0
+        since[i] = t
+        replans[i] += 1
+
+    for i in range(n):
+        if status[i] == "arrived":
+            continue
+        # half the tolerance: the estimate the decision uses may be off by a few cm
+        if math.hypot(*(pose[i, :2] - state.goals_m[i])) <= 0.5 * params.goal_tolerance_m:
+            status[i] = "arrived"
+            continue
+        if aside[i] >= 0 and (
+            math.hypot(*(pose[i, :2] - target[i])) <= params.goal_tolerance_m
+            or status[aside[i]] not in ("moving", "waiting")
+        ):
+            # out of the way (or the teammate is done): head for the goal again
+            aside[i] = -1
+            target[i] = state.goals_m[i]
+            replan(i, with_mates=False)
+        if paths[i] is None:
+            if t - since[i] >= params.stuck_time_s:  # try again now and then
+                replan(i, with_mates=False)
+            if paths[i] is None:
+                continue
+        smp = samples[i]
+        spacing = paths[i].length_m / max(len(smp) - 1, 1)  # type: ignore[union-attr]
+        lo = max(int((progress[i] - 0.3) / spacing), 0)
+        hi = min(int((progress[i] + 1.0) / spacing) + 2, len(smp))
+        d = np.hypot(smp[lo:hi, 0] - pose[i, 0], smp[lo:hi, 1] - pose[i, 1])
+        k = int(np.argmin(d))
+        progress[i] = (lo + k) * spacing
+        index[i] = lo + k
+        if d[k] > params.replan_offset_m:
+            replan(i, with_mates=False)
+        elif status[i] == "moving" and t - since[i] >= params.stuck_time_s:
+            if progress[i] - best[i] < params.stuck_progress_m:
+                stuck[i] += 1
+                if aside[i] >= 0:  # cannot get out of the way there: plan anew
+                    aside[i] = -1
+                    target[i] = state.goals_m[i]
+                replan(i, with_mates=True)
+            else:
+                stuck[i] = 0
+                best[i] = progress[i]
+                since[i] = t
+        path = paths[i]
+        if path is None:
+            continue
+        if status[i] == "waiting":
+            status[i] = "moving"
+        if progress[i] == 0.0:
+            index[i] = 0  # just re-planned
+        desired[i] = path.pose_at(min(progress[i] + params.lookahead_m, path.length_m))
+
+    active = np.array([s in ("moving", "waiting") for s in status])
+    v_ref = np.zeros(n)
+    w_ref = np.zeros(n)
+    if active.any():
+        v_f, w_f, _ = params.controller.command(controller_inputs(pose[active], desired[active]))
+        v_ref[active] = np.clip(v_f, 0.0, params.dwa.v_max_m_s)
+        w_ref[active] = np.clip(w_f, -params.dwa.omega_max_rad_s, params.dwa.omega_max_rad_s)
+
+    # give way: lower index first
+    gap = 2.0 * params.robot_radius_m + params.margin_m
+    ahead = round(params.yield_distance_m / _SAMPLE_M)
+    for i in map(int, np.nonzero(active)[0]):
+        if aside[i] >= 0:
+            continue  # already on its way out of a teammate's way: it does not stop
+        mine = samples[i][index[i] : index[i] + ahead, :2]
+        for j in range(i):
+            if not active[j] or len(mine) == 0:
+                continue
+            if math.hypot(*(pose[i, :2] - pose[j, :2])) > 2.0 * params.yield_distance_m + gap:
+                continue
+            theirs = np.vstack([pose[j : j + 1, :2], samples[j][index[j] : index[j] + ahead, :2]])
+            meets, in_way = _conflict(mine, theirs, pose[i, :2], gap)
+            if meets and in_way and aside[i] < 0:
+                rest = np.vstack([pose[j : j + 1, :2], samples[j][index[j] :: 2, :2]])
+                spot = _aside_spot(state, params, pose, mates, i, j, rest, gap)
+                if spot is not None:
+                    aside[i] = j
+                    target[i] = spot
+                    replan(i, with_mates=True)
+                    index[i] = 0
+                    v_ref[i] = 0.0
+                    break
+            if meets and not in_way:
+                status[i] = "waiting"
+                v_ref[i] = 0.0
+                best[i] = progress[i]
+                since[i] = t
+                break
+
+    # the safety layer
+    reach = params.dwa.v_max_m_s * params.dwa.horizon_s + params.robot_radius_m + 0.5
+    points = _range_points(inputs, pose, reach)
+    mate_pts = np.broadcast_to(mates[None], (n, n, 2)).copy()
+    mate_pts[np.arange(n), np.arange(n)] = _FAR
+    walls, wall_radius = _near_walls(state, pose, reach)
+    obstacles = np.concatenate([points, walls, mate_pts], axis=1)
+    radii = np.concatenate(
+        [
+            np.zeros(points.shape[:2]),
+            np.full(walls.shape[:2], wall_radius),
+            np.full((n, n), params.robot_radius_m),
+        ],
+        axis=1,
+    )
+    v, w, _ = dwa_command(
+        pose, state.command, np.stack([v_ref, w_ref], axis=1), obstacles, radii, params.dwa, dt_s
+    )
+    # robots that stop: brake as hard as the window allows (the window holds 0 after
+    # a tenth of a second at most)
+    stop = ~active
+    if stop.any():
+        da = params.dwa.wheel_accel_m_s2 * dt_s
+        half = params.dwa.axle_length_m / 2.0
+        last = state.command
+        v[stop] = np.maximum(last[stop, 0] - da, 0.0)
+        budget = np.maximum(da - (last[stop, 0] - v[stop]), 0.0) / half
+        w[stop] = np.sign(last[stop, 1]) * np.maximum(np.abs(last[stop, 1]) - budget, 0.0)
+    new = replace(
+        state,
+        paths=tuple(paths),
+        samples=tuple(samples),
+        progress_m=progress,
+        status=tuple(status),
+        command=np.stack([v, w], axis=1),
+        best_progress_m=best,
+        since_s=since,
+        stuck_count=stuck,
+        replans=replans,
+        t_s=t,
+        target_m=target,
+        aside_of=aside,
+    )
+    return new, v, w

@@ -1,0 +1,608 @@
+"""Range sensors on a building map: an ultrasonic ring, a planar lidar, a stereo range scan.
+
+Every sensor casts exact rays on the :class:`~firefleet.world.OccupancyGrid` (cell by
+cell, Amanatides and Woo's traversal, compiled with numba: :mod:`._ranging_cast`) from
+the robot's centre, for the whole team at once (poses (N, 3), readings (N, K)).
+Occupied cells block a ray; free and unknown cells, and the space off the map, do not.
+The other robots are discs of ``robot_radius_m`` that block too; a robot never sees
+itself. Ranges are measured from the robot's centre [m]; ``inf`` means no return
+within the sensor's maximum range (or, for the ultrasonic ring, a lost echo).
+
+- **Ultrasonic ring** (:class:`UltrasonicParams`, HC-SR04-like): ``count`` sensors
+  evenly around the robot, each reporting the nearest return inside its cone, found
+  with ``rays_per_cone`` rays spread evenly across the cone (edges included), so a wall
+  whose normal lies outside the cone is ranged exactly along the cone's edge and one
+  whose normal lies inside within a factor ``1 / cos(spacing / 2)``. Gaussian noise;
+  a reading nearer than ``min_range_m`` reads ``min_range_m``; the echo is lost
+  (reading ``inf``) with a probability that rises with the incidence angle ``i``
+  between the returning ray and the normal of the face it hit (a smooth surface at
+  grazing incidence reflects the ping away):
+  ``p = p0 + (1 - p0) / (1 + exp(-(i - i50) / w))``.
+- **Lidar** (:class:`LidarParams`): ``beams`` rays evenly over the field of view,
+  Gaussian noise.
+- **Stereo range scan** (:class:`StereoScanParams`): what ``firefleet stereo``
+  produces (:func:`firefleet.perception.stereo.range_scan`): the horizontal distance to
+  the nearest obstacle in each of ``sectors`` equal bearing sectors across the
+  camera's field of view ``2 atan(W / (2 f))``, here the least of ``rays_per_sector``
+  rays across each sector. Depth noise is the stereo pair's:
+  ``sigma_Z = Z^2 sigma_d / (f B)`` on the depth ``Z = r cos(bearing)``.
+
+References
+----------
+.. [1] J. Amanatides, A. Woo, "A fast voxel traversal algorithm for ray tracing",
+   Eurographics 1987.
+.. [2] Elec Freaks, "HC-SR04 ultrasonic ranging module" data sheet: 2 cm to 4 m,
+   15 degree measuring angle, 60 ms measurement cycle.
+.. [3] D. Gallup et al., "Variable baseline/resolution stereo", CVPR 2008 (stereo depth
+   error grows with depth squared: ``dZ = Z^2 dd / (f B)``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from firefleet._typing import FloatArray
+from firefleet.errors import InputError, as_float_array
+from firefleet.sim._ranging_cast import cast_team
+from firefleet.world import OccupancyGrid
+
+__all__ = [
+    "LidarParams",
+    "RangeSensors",
+    "StereoScanParams",
+    "UltrasonicParams",
+    "lidar_scan",
+    "stereo_scan",
+    "ultrasonic_scan",
+]
+
+
+def _check(
+    obj: Any, section: str, *, positive: tuple[str, ...], non_negative: tuple[str, ...] = ()
+) -> None:
+    """Each named field a finite number (> 0 or >= 0), else InputError naming it."""
+    for name in positive + non_negative:
+        value = getattr(obj, name)
+        ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+        if not ok or (value <= 0 if name in positive else value < 0):
+            bound = "> 0" if name in positive else ">= 0"
+            raise InputError(f"{section}.{name} must be a finite number {bound}, got {value!r}")
+
+
+def _check_int(obj: Any, section: str, name: str, low: int) -> None:
+    value = getattr(obj, name)
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
+        raise InputError(f"{section}.{name} must be an integer >= {low}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class UltrasonicParams:
+    """An HC-SR04-like ultrasonic ring.
+
+    Attributes
+    ----------
+    count : int
+        Sensors, evenly around the robot, the first facing ahead.
+    fov_deg : float
+        Full width of each sensor's cone [deg] (HC-SR04: 15).
+    min_range_m, max_range_m : float
+        Nearest and farthest range measured [m] (HC-SR04: 0.02 and 4); nearer reads
+        ``min_range_m``, farther ``inf``.
+    noise_m : float
+        Standard deviation of the Gaussian range noise [m].
+    rays_per_cone : int
+        Rays cast across each cone, its edges included (1: along the axis only).
+    dropout : float
+        ``p0``, the probability of a lost echo at normal incidence.
+    dropout_incidence_deg : float
+        ``i50``, the incidence angle at which half the echoes are lost [deg].
+    dropout_width_deg : float
+        ``w``, how gradually the loss rises about ``i50`` [deg].
+    rate_hz : float
+        Rate of a full ring of readings in the loop (:class:`RangeSensors`) [Hz]
+        (HC-SR04: a 60 ms cycle, about 16 Hz).
+
+    Examples
+    --------
+    >>> from firefleet.sim.ranging import UltrasonicParams
+    >>> p = UltrasonicParams()
+    >>> p.count, p.bearings_rad.round(3).tolist()[:3]
+    (8, [0.0, 0.785, 1.571])
+    """
+
+    count: int = 8
+    fov_deg: float = 15.0
+    min_range_m: float = 0.02
+    max_range_m: float = 4.0
+    noise_m: float = 0.01
+    rays_per_cone: int = 5
+    dropout: float = 0.01
+    dropout_incidence_deg: float = 50.0
+    dropout_width_deg: float = 6.0
+    rate_hz: float = 15.0
+
+    def __post_init__(self) -> None:
+        s = "ultrasonic"
+        _check_int(self, s, "count", 1)
+        _check_int(self, s, "rays_per_cone", 1)
+        _check(
+            self,
+            s,
+            positive=("fov_deg", "max_range_m", "dropout_width_deg", "rate_hz"),
+            non_negative=("min_range_m", "noise_m", "dropout", "dropout_incidence_deg"),
+        )
+        if not self.min_range_m < self.max_range_m:
+            raise InputError(
+                f"ultrasonic.min_range_m must be < max_range_m ({self.max_range_m}), "
+                f"got {self.min_range_m}"
+            )
+        if not self.dropout < 1.0:
+            raise InputError(f"ultrasonic.dropout must be a probability < 1, got {self.dropout}")
+        if not self.fov_deg < 180.0:
+            raise InputError(f"ultrasonic.fov_deg must be < 180 degrees, got {self.fov_deg}")
+
+    @property
+    def bearings_rad(self) -> FloatArray:
+        """Each sensor's axis from the heading, positive to the left [rad], shape (K,)."""
+        return 2.0 * np.pi * np.arange(self.count) / self.count
+
+    @property
+    def ray_offsets_rad(self) -> FloatArray:
+        """The rays of one cone about its axis [rad], shape (rays_per_cone,)."""
+        if self.rays_per_cone == 1:
+            return np.zeros(1)
+        half = math.radians(self.fov_deg) / 2.0
+        return np.linspace(-half, half, self.rays_per_cone)
+
+    def dropout_probability(self, incidence_rad: ArrayLike) -> FloatArray:
+        """Probability of a lost echo at each incidence angle [rad] (see the module notes).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from firefleet.sim.ranging import UltrasonicParams
+        >>> p = UltrasonicParams(dropout=0.0, dropout_incidence_deg=50.0)
+        >>> float(p.dropout_probability(np.radians(50.0)))
+        0.5
+        """
+        i = np.asarray(incidence_rad, dtype=float)
+        z = (i - math.radians(self.dropout_incidence_deg)) / math.radians(self.dropout_width_deg)
+        return np.asarray(self.dropout + (1.0 - self.dropout) * 0.5 * (1.0 + np.tanh(z / 2.0)))
+
+
+@dataclass(frozen=True)
+class LidarParams:
+    """A planar scanning lidar.
+
+    Attributes
+    ----------
+    beams : int
+        Beams, evenly over the field of view.
+    fov_deg : float
+        Field of view centred on the heading [deg], up to 360 (then the beams are
+        ``2 pi / beams`` apart, the first straight behind).
+    max_range_m : float
+        Farthest range [m]; farther reads ``inf``.
+    noise_m : float
+        Standard deviation of the Gaussian range noise [m].
+    rate_hz : float
+        Scan rate in the loop (:class:`RangeSensors`) [Hz].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.ranging import LidarParams
+    >>> np.degrees(LidarParams(beams=4).bearings_rad).tolist()
+    [-180.0, -90.0, 0.0, 90.0]
+    >>> np.degrees(LidarParams(beams=3, fov_deg=180.0).bearings_rad).tolist()
+    [-90.0, 0.0, 90.0]
+    """
+
+    beams: int = 90
+    fov_deg: float = 360.0
+    max_range_m: float = 10.0
+    noise_m: float = 0.01
+    rate_hz: float = 10.0
+
+    def __post_init__(self) -> None:
+        _check_int(self, "lidar", "beams", 1)
+        _check(
+            self, "lidar", positive=("fov_deg", "max_range_m", "rate_hz"), non_negative=("noise_m",)
+        )
+        if self.fov_deg > 360.0:
+            raise InputError(f"lidar.fov_deg must be <= 360 degrees, got {self.fov_deg}")
+
+    @property
+    def bearings_rad(self) -> FloatArray:
+        """Each beam's bearing from the heading, positive to the left [rad], shape (B,)."""
+        fov = math.radians(self.fov_deg)
+        if self.fov_deg >= 360.0:
+            return -np.pi + 2.0 * np.pi * np.arange(self.beams) / self.beams
+        if self.beams == 1:
+            return np.zeros(1)
+        return np.linspace(-fov / 2.0, fov / 2.0, self.beams)
+
+
+@dataclass(frozen=True)
+class StereoScanParams:
+    """The stereo pair's virtual range scan (``firefleet stereo``), looking ahead.
+
+    Attributes
+    ----------
+    sectors : int
+        S, equal bearing sectors across the field of view (the ``stereo`` command's 32).
+    width_px : int
+        Image width W [px].
+    focal_px : float
+        Rectified focal length f [px]; the field of view is ``2 atan(W / (2 f))``.
+    baseline_m : float
+        Baseline B [m].
+    disparity_noise_px : float
+        ``sigma_d``, the matcher's disparity noise [px] (sub-pixel SGBM: a few tenths).
+    min_range_m : float
+        Nearest range measured (the disparity search's near limit) [m]; nearer reads
+        ``min_range_m``.
+    max_range_m : float
+        Farthest range reported [m]; farther reads ``inf``.
+    rays_per_sector : int
+        Rays across each sector, its edges included.
+    rate_hz : float
+        Frame rate in the loop (:class:`RangeSensors`) [Hz].
+
+    Examples
+    --------
+    >>> import math
+    >>> from firefleet.sim.ranging import StereoScanParams
+    >>> p = StereoScanParams()
+    >>> round(math.degrees(p.fov_rad), 1), p.bearings_rad.shape
+    (56.1, (32,))
+    """
+
+    sectors: int = 32
+    width_px: int = 640
+    focal_px: float = 600.0
+    baseline_m: float = 0.1
+    disparity_noise_px: float = 0.25
+    min_range_m: float = 0.3
+    max_range_m: float = 8.0
+    rays_per_sector: int = 3
+    rate_hz: float = 10.0
+
+    def __post_init__(self) -> None:
+        s = "stereo"
+        _check_int(self, s, "sectors", 1)
+        _check_int(self, s, "width_px", 1)
+        _check_int(self, s, "rays_per_sector", 1)
+        _check(
+            self,
+            s,
+            positive=("focal_px", "baseline_m", "max_range_m", "rate_hz"),
+            non_negative=("disparity_noise_px", "min_range_m"),
+        )
+        if not self.min_range_m < self.max_range_m:
+            raise InputError(
+                f"stereo.min_range_m must be < max_range_m ({self.max_range_m}), "
+                f"got {self.min_range_m}"
+            )
+
+    @property
+    def fov_rad(self) -> float:
+        """Horizontal field of view ``2 atan(W / (2 f))`` [rad]."""
+        return 2.0 * math.atan(self.width_px / (2.0 * self.focal_px))
+
+    @property
+    def edges_rad(self) -> FloatArray:
+        """Sector boundaries from the heading, increasing [rad], shape (S + 1,)."""
+        return np.linspace(-self.fov_rad / 2.0, self.fov_rad / 2.0, self.sectors + 1)
+
+    @property
+    def bearings_rad(self) -> FloatArray:
+        """Each sector's centre from the heading, positive to the left [rad], shape (S,)."""
+        e = self.edges_rad
+        return 0.5 * (e[:-1] + e[1:])
+
+    def depth_sigma_m(self, depth_m: ArrayLike) -> FloatArray:
+        """``sigma_Z = Z^2 sigma_d / (f B)`` [m] at each depth [m].
+
+        Examples
+        --------
+        >>> from firefleet.sim.ranging import StereoScanParams
+        >>> p = StereoScanParams(focal_px=600.0, baseline_m=0.1, disparity_noise_px=0.3)
+        >>> float(p.depth_sigma_m(2.0))  # 2^2 0.3 / (600 0.1)
+        0.02
+        """
+        z = np.asarray(depth_m, dtype=float)
+        return np.asarray(z**2 * self.disparity_noise_px / (self.focal_px * self.baseline_m))
+
+    def ray_bearings_rad(self) -> FloatArray:
+        """The rays of every sector [rad], shape (S, rays_per_sector)."""
+        e = self.edges_rad
+        if self.rays_per_sector == 1:
+            return self.bearings_rad[:, None]
+        f = np.linspace(0.0, 1.0, self.rays_per_sector)
+        return e[:-1, None] + f[None, :] * (e[1:] - e[:-1])[:, None]
+
+
+def _poses(poses: ArrayLike) -> FloatArray:
+    return as_float_array(poses, "poses", (None, 3))
+
+
+def _radius(robot_radius_m: float) -> float:
+    if not (math.isfinite(robot_radius_m) and robot_radius_m >= 0.0):
+        raise InputError(f"robot_radius_m must be a finite number >= 0, got {robot_radius_m}")
+    return float(robot_radius_m)
+
+
+def _cast(
+    grid: OccupancyGrid, poses: FloatArray, bearings: FloatArray, max_range_m: float, radius: float
+) -> tuple[FloatArray, FloatArray]:
+    return cast_team(
+        grid.occupied, grid.resolution_m, grid.origin_m, poses, bearings, max_range_m, radius
+    )
+
+
+def lidar_scan(
+    grid: OccupancyGrid,
+    poses: ArrayLike,
+    params: LidarParams,
+    *,
+    robot_radius_m: float,
+    rng: np.random.Generator,
+) -> FloatArray:
+    """Lidar ranges of every robot: shape (N, B) [m], ``inf`` where nothing within range.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The map (occupied cells block the beams).
+    poses : array_like, shape (N, 3)
+        True poses x [m], y [m], theta [rad].
+    params : LidarParams
+        Beam ``b`` points at ``theta + params.bearings_rad[b]``.
+    robot_radius_m : float
+        Radius of every robot's disc [m] (the others block the beams; 0: they do not).
+    rng : numpy.random.Generator
+        Draws the noise.
+
+    Returns
+    -------
+    ndarray, shape (N, B)
+        Ranges from each robot's centre [m], noisy, in ``[0, max_range_m]``, or ``inf``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.ranging import LidarParams, lidar_scan
+    >>> from firefleet.world import OccupancyGrid
+    >>> occupied = np.zeros((20, 20), dtype=bool)
+    >>> occupied[:, 15] = True  # a wall at x = 1.5 m
+    >>> grid = OccupancyGrid(occupied, ~occupied, resolution_m=0.1)
+    >>> params = LidarParams(beams=4, noise_m=0.0)
+    >>> lidar_scan(grid, [[0.5, 1.0, 0.0]], params, robot_radius_m=0.2,
+    ...            rng=np.random.default_rng(0)).round(6).tolist()  # behind, right, ahead, left
+    [[inf, inf, 1.0, inf]]
+    """
+    p = _poses(poses)
+    r, _ = _cast(grid, p, params.bearings_rad, params.max_range_m, _radius(robot_radius_m))
+    if params.noise_m > 0.0:
+        r = np.clip(r + params.noise_m * rng.standard_normal(r.shape), 0.0, params.max_range_m)
+    return r
+
+
+def ultrasonic_scan(
+    grid: OccupancyGrid,
+    poses: ArrayLike,
+    params: UltrasonicParams,
+    *,
+    robot_radius_m: float,
+    rng: np.random.Generator,
+) -> FloatArray:
+    """Ultrasonic ring readings of every robot: shape (N, K) [m], ``inf`` for no echo.
+
+    Each sensor ``k`` looks along ``theta + params.bearings_rad[k]`` and reports the
+    nearest return of the rays across its cone (``params.ray_offsets_rad``), plus
+    Gaussian noise, at least ``min_range_m``, or ``inf`` when nothing lies within
+    ``max_range_m`` or the echo was lost (probability
+    ``params.dropout_probability(incidence)``, incidence of the returning ray).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    poses : array_like, shape (N, 3)
+        True poses x [m], y [m], theta [rad].
+    params : UltrasonicParams
+    robot_radius_m : float
+        Radius of every robot's disc [m].
+    rng : numpy.random.Generator
+        Draws the noise and the dropouts.
+
+    Returns
+    -------
+    ndarray, shape (N, K)
+        Ranges from each robot's centre [m].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.ranging import UltrasonicParams, ultrasonic_scan
+    >>> from firefleet.world import OccupancyGrid
+    >>> occupied = np.zeros((20, 20), dtype=bool)
+    >>> occupied[:, 15] = True  # a wall at x = 1.5 m
+    >>> grid = OccupancyGrid(occupied, ~occupied, resolution_m=0.1)
+    >>> params = UltrasonicParams(count=4, noise_m=0.0, dropout=0.0)
+    >>> scan = ultrasonic_scan(grid, [[0.5, 1.0, 0.0]], params, robot_radius_m=0.2,
+    ...                        rng=np.random.default_rng(0))
+    >>> scan.round(6).tolist()  # ahead, left, behind, right
+    [[1.0, inf, inf, inf]]
+    """
+    p = _poses(poses)
+    n, k, m = p.shape[0], params.count, params.rays_per_cone
+    rays = (params.bearings_rad[:, None] + params.ray_offsets_rad[None, :]).ravel()
+    r, cos_i = _cast(grid, p, rays, params.max_range_m, _radius(robot_radius_m))
+    r = r.reshape(n, k, m)
+    cos_i = cos_i.reshape(n, k, m)
+    nearest = np.argmin(r, axis=2)[..., None]
+    rng_k = np.take_along_axis(r, nearest, axis=2)[..., 0]
+    cos_k = np.take_along_axis(cos_i, nearest, axis=2)[..., 0]
+    incidence = np.arccos(np.clip(cos_k, 0.0, 1.0))
+    lost = rng.random((n, k)) < params.dropout_probability(incidence)
+    noise = params.noise_m * rng.standard_normal((n, k))
+    out = np.clip(rng_k + noise, params.min_range_m, params.max_range_m)
+    out[lost | ~np.isfinite(rng_k)] = np.inf
+    return out
+
+
+def stereo_scan(
+    grid: OccupancyGrid,
+    poses: ArrayLike,
+    params: StereoScanParams,
+    *,
+    robot_radius_m: float,
+    rng: np.random.Generator,
+) -> FloatArray:
+    """The stereo pair's range scan of every robot: shape (N, S) [m], ``inf`` if empty.
+
+    Sector ``s`` spans ``params.edges_rad[s:s + 2]`` from the heading; its reading is
+    the least range of its rays, its depth ``Z = r cos(bearing)`` disturbed by the
+    stereo noise ``N(0, (Z^2 sigma_d / (f B))^2)``, at least ``min_range_m``, or ``inf``
+    beyond ``max_range_m``.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    poses : array_like, shape (N, 3)
+        True poses x [m], y [m], theta [rad] (the camera looks along theta).
+    params : StereoScanParams
+    robot_radius_m : float
+        Radius of every robot's disc [m].
+    rng : numpy.random.Generator
+        Draws the depth noise.
+
+    Returns
+    -------
+    ndarray, shape (N, S)
+        Horizontal ranges from each robot's centre [m].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.ranging import StereoScanParams, stereo_scan
+    >>> from firefleet.world import OccupancyGrid
+    >>> occupied = np.zeros((40, 40), dtype=bool)
+    >>> occupied[:, 30] = True  # a wall at x = 3 m
+    >>> grid = OccupancyGrid(occupied, ~occupied, resolution_m=0.1)
+    >>> params = StereoScanParams(sectors=4, disparity_noise_px=0.0)
+    >>> stereo_scan(grid, [[1.0, 2.0, 0.0]], params, robot_radius_m=0.2,
+    ...             rng=np.random.default_rng(0)).round(3).tolist()  # 2 / cos(14 deg) outside
+    [[2.062, 2.0, 2.0, 2.062]]
+    """
+    p = _poses(poses)
+    n, s, m = p.shape[0], params.sectors, params.rays_per_sector
+    bearings = params.ray_bearings_rad()
+    r, _ = _cast(grid, p, bearings.ravel(), params.max_range_m, _radius(robot_radius_m))
+    r = r.reshape(n, s, m)
+    nearest = np.argmin(r, axis=2)[..., None]
+    rng_s = np.take_along_axis(r, nearest, axis=2)[..., 0]
+    cos_b = np.cos(np.take_along_axis(np.broadcast_to(bearings, r.shape), nearest, axis=2)[..., 0])
+    depth = np.where(np.isfinite(rng_s), rng_s * cos_b, 0.0)
+    depth = depth + params.depth_sigma_m(depth) * rng.standard_normal((n, s))
+    out = np.clip(depth / cos_b, params.min_range_m, None)
+    out[~np.isfinite(rng_s) | (out > params.max_range_m)] = np.inf
+    return np.asarray(out)
+
+
+class RangeSensors:
+    """The loop's range sensor stage (:class:`firefleet.sim.loop.Sensors`).
+
+    ``read(world, drive)`` returns, for the sensors configured, ``"ultrasonic_range_m"``
+    (N, K), ``"lidar_range_m"`` (N, B) and ``"stereo_scan_m"`` (N, S) of the true poses
+    ``drive.pose``. Each sensor scans at its own ``rate_hz``: at the first tick, then
+    whenever its period has passed (tick ``k`` scans if ``floor(k dt f)`` moved on), and
+    the readings hold between scans, as a real sensor's last reading does. A rate at or
+    above the loop's ``1 / dt_s`` scans every tick. The stage counts the ticks it read:
+    use one stage per run.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    robot_radius_m : float
+        Radius of every robot's disc [m] (the others block the beams).
+    ultrasonic, lidar, stereo : params or None
+        The sensors fitted (None: absent).
+    dt_s : float
+        The loop's tick [s].
+    rng : numpy.random.Generator
+        Draws every sensor's noise.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from firefleet.sim.ranging import LidarParams, RangeSensors
+    >>> from firefleet.world import OccupancyGrid
+    >>> occupied = np.zeros((20, 20), dtype=bool)
+    >>> occupied[:, 15] = True
+    >>> grid = OccupancyGrid(occupied, ~occupied, resolution_m=0.1)
+    >>> stage = RangeSensors(grid, 0.2, lidar=LidarParams(beams=4, noise_m=0.0),
+    ...                      rng=np.random.default_rng(0))
+    >>> drive = SimpleNamespace(pose=np.array([[0.5, 1.0, 0.0]]))
+    >>> stage.read(None, drive)["lidar_range_m"].round(6).tolist()
+    [[inf, inf, 1.0, inf]]
+    """
+
+    def __init__(
+        self,
+        grid: OccupancyGrid,
+        robot_radius_m: float,
+        ultrasonic: UltrasonicParams | None = None,
+        lidar: LidarParams | None = None,
+        stereo: StereoScanParams | None = None,
+        *,
+        dt_s: float = 0.01,
+        rng: np.random.Generator,
+    ) -> None:
+        if not (math.isfinite(dt_s) and dt_s > 0.0):
+            raise InputError(f"dt_s must be > 0, got {dt_s}")
+        self.grid = grid
+        self.robot_radius_m = _radius(robot_radius_m)
+        self.dt_s = float(dt_s)
+        self.rng = rng
+        self.sensors: dict[str, Any] = {}
+        if ultrasonic is not None:
+            self.sensors["ultrasonic_range_m"] = ultrasonic
+        if lidar is not None:
+            self.sensors["lidar_range_m"] = lidar
+        if stereo is not None:
+            self.sensors["stereo_scan_m"] = stereo
+        self._tick = 0
+        self._last: dict[str, FloatArray] = {}
+
+    def _due(self, params: Any) -> bool:
+        k = self._tick
+        f = params.rate_hz * self.dt_s
+        return k == 0 or f >= 1.0 or math.floor(k * f + 1e-9) != math.floor((k - 1) * f + 1e-9)
+
+    def read(self, world: Any, drive: Any) -> dict[str, FloatArray]:
+        """Readings by name at this tick (held from the last scan between scans)."""
+        scans: dict[str, Callable[..., FloatArray]] = {
+            "ultrasonic_range_m": ultrasonic_scan,
+            "lidar_range_m": lidar_scan,
+            "stereo_scan_m": stereo_scan,
+        }
+        for name, params in self.sensors.items():
+            if self._due(params) or name not in self._last:
+                self._last[name] = scans[name](
+                    self.grid,
+                    drive.pose,
+                    params,
+                    robot_radius_m=self.robot_radius_m,
+                    rng=self.rng,
+                )
+        self._tick += 1
+        return dict(self._last)
