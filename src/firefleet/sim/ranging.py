@@ -40,6 +40,7 @@ References
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -49,7 +50,7 @@ from numpy.typing import ArrayLike
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array
-from firefleet.sim._ranging_cast import cast_team
+from firefleet.sim._ranging_cast import cast_team, clearance_cells
 from firefleet.world import OccupancyGrid
 
 __all__ = [
@@ -339,11 +340,26 @@ def _radius(robot_radius_m: float) -> float:
     return float(robot_radius_m)
 
 
+_CLEARANCE: weakref.WeakKeyDictionary[OccupancyGrid, FloatArray] = weakref.WeakKeyDictionary()
+"""Each grid's empty-space jumps (:func:`clearance_cells`), computed once per grid: a memo
+of a pure function of an immutable map, dropped with the map."""
+
+
 def _cast(
     grid: OccupancyGrid, poses: FloatArray, bearings: FloatArray, max_range_m: float, radius: float
 ) -> tuple[FloatArray, FloatArray]:
+    clearance = _CLEARANCE.get(grid)
+    if clearance is None:
+        clearance = _CLEARANCE[grid] = clearance_cells(grid.occupied)
     return cast_team(
-        grid.occupied, grid.resolution_m, grid.origin_m, poses, bearings, max_range_m, radius
+        grid.occupied,
+        grid.resolution_m,
+        grid.origin_m,
+        poses,
+        bearings,
+        max_range_m,
+        radius,
+        clearance,
     )
 
 
