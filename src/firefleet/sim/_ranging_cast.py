@@ -356,6 +356,9 @@ def cast_team(
     b = np.ascontiguousarray(bearings_rad, dtype=np.float64)
     out_range = np.empty((p.shape[0], b.shape[0]))
     out_cos = np.empty((p.shape[0], b.shape[0]))
+    # one core: robots spread over the cores with numba.prange took 7x longer for 1,000
+    # robots and 8 rays each (14.5 ms against 2.0 ms) on a busy two-core machine, where
+    # waking the threads costs more than a scan
     _cast_team(
         occ,
         float(resolution_m),
