@@ -51,6 +51,7 @@ from scipy import ndimage
 from _harness import Floor, Row, TopicResult, best_of, best_of_interleaved
 from firefleet.control.pid import PidParams
 from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+from firefleet.sim._ranging_cast import cast_team
 from firefleet.sim.drive import discretise_drive, drive_init
 from firefleet.sim.loop import Stages, StaticWorld, WheelCommand, run_staged
 from firefleet.sim.ranging import (
@@ -238,6 +239,34 @@ def irsim_run(world: Path, n_robots: int, n_steps: int) -> tuple[Callable[[], ob
     return run, env
 
 
+def scan_agreement(grid: OccupancyGrid, env: Any) -> dict[str, float]:
+    """IR-SIM's current scans against firefleet's casts at the same poses and angles."""
+    diffs, both, only_one = [], 0, 0
+    poses = np.array([r.state.ravel()[:3] for r in env.robot_list])
+    for a, robot in enumerate(env.robot_list):
+        lidar = robot.sensors[0]
+        ours, _ = cast_team(
+            grid.occupied,
+            grid.resolution_m,
+            grid.origin_m,
+            np.roll(poses, -a, axis=0),
+            np.asarray(lidar.angle_list),
+            10.0,
+            RADIUS_M,
+        )
+        theirs = np.where(lidar.valid, lidar.range_data, np.inf)
+        hit = np.isfinite(ours[0]) & np.isfinite(theirs)
+        both += int(hit.sum())
+        only_one += int((np.isfinite(ours[0]) != np.isfinite(theirs)).sum())
+        diffs.extend(np.abs(ours[0][hit] - theirs[hit]).tolist())
+    return {
+        "beams_both_hit": both,
+        "beams_one_hit": only_one,
+        "max_abs_difference_m": max(diffs) if diffs else float("nan"),
+        "median_abs_difference_m": float(np.median(diffs)) if diffs else float("nan"),
+    }
+
+
 # ------------------------------------------------------------------------- cases
 
 
@@ -251,8 +280,9 @@ def bench_lidar(console: Console) -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as tmp:
         world = irsim_world(walls, poses, Path(tmp))
         theirs, env = irsim_run(world, N_LIDAR, LIDAR_STEPS)
-        # the same scene: IR-SIM's first scan beside ours at the start poses
+        # the same scene: IR-SIM's first scan beside ours, at its poses and beam angles
         r0 = lidar_scan(grid, poses, lidar, robot_radius_m=RADIUS_M, rng=np.random.default_rng(0))
+        out["irsim_agreement"] = scan_agreement(grid, env)
         times = best_of_interleaved({"firefleet": ours, "irsim": theirs}, ROUNDS)
         del env
     ours_sps = LIDAR_STEPS / times["firefleet"].best_s
@@ -283,6 +313,12 @@ def bench_lidar(console: Console) -> dict[str, Any]:
     table.add_row("IR-SIM (headless env.step)", f"{theirs_sps:,.0f}", "1x")
     table.add_row("firefleet lidar scan alone", f"{1 / scan.best_s:,.0f}", "")
     console.print(table)
+    agree = out["irsim_agreement"]
+    console.print(
+        f"  same scene: {agree['beams_both_hit']} beams hit in both, {agree['beams_one_hit']} in "
+        f"one only; |firefleet - IR-SIM| median {agree['median_abs_difference_m']:.1e} m, "
+        f"max {agree['max_abs_difference_m']:.1e} m (IR-SIM's discs are polygons)"
+    )
     return out
 
 
