@@ -37,6 +37,9 @@ TOPICS = (
     "stereo",
     "slam",
     "gridslam",
+    "net",
+    "link",
+    "navigation",
 )
 ISSUE_12: tuple[tuple[str, h.Op, float], ...] = (
     ("motor.single.speedup_vs_python_control", ">=", 100.0),

@@ -130,7 +130,7 @@ def test_inflation_is_an_exact_disc() -> None:
     assert np.array_equal(cm.blocked, centre_distance <= 0.5)
     # the wall cost falls off with the clearance and is 1 + weight at the edge
     assert np.all(np.isinf(cm.cost[cm.blocked]))
-    assert cm.cost[20, 31] == pytest.approx(1.0 + 4.0 * math.exp(-(0.55 - 0.5) / 0.25))
+    assert cm.cost[20, 31] == pytest.approx(1.0 + 2.0 * math.exp(-(0.55 - 0.5) / 0.1))
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -114,18 +114,20 @@ def test_the_chosen_command_is_in_the_window_and_admissible(
     )
 
 
-def test_dwa_turns_away_from_a_wall_ahead() -> None:
+def test_dwa_brakes_or_turns_before_a_wall_it_cannot_drive_at() -> None:
     p = DwaParams()
-    wall = np.stack([np.full(21, 0.4), np.linspace(-1, 1, 21)], axis=1)[None]
+    wall = np.stack([np.full(21, 0.17), np.linspace(-1, 1, 21)], axis=1)[None]
     rad = np.zeros((1, 21))
-    straight, _ = _numpy_evaluate(np.zeros(3), 0.5, 0.0, wall[0], rad[0], 0.15, 1.5, 15)
-    assert straight < 0.0  # the reference would run into the wall within the horizon
+    _, travel = _numpy_evaluate(np.zeros(3), 0.5, 0.0, wall[0], rad[0], 0.15, 1.5, 15)
+    # straight on at 0.5 m/s: contact sooner than the wheels can stop (inadmissible)
+    assert math.sqrt(2.0 * p.wheel_accel_m_s2 * travel) < 0.5
     v, w, c = dwa_command([[0, 0, 0]], [[0.5, 0.0]], [[0.5, 0.0]], wall, rad, p, 0.1)
-    assert abs(w[0]) > 1.0  # it bends away instead
-    assert c[0] > 0.0
-    assert c[0] == pytest.approx(
-        _numpy_evaluate(np.zeros(3), v[0], w[0], wall[0], rad[0], 0.15, 1.5, 15)[0]
-    )
+    got_c, got_travel = _numpy_evaluate(np.zeros(3), v[0], w[0], wall[0], rad[0], 0.15, 1.5, 15)
+    # admissible, or (nothing is) the hardest braking the window allows: 0.5 - a dt
+    braking = 0.5 - p.wheel_accel_m_s2 * 0.1
+    assert v[0] <= math.sqrt(2.0 * p.wheel_accel_m_s2 * got_travel) + 1e-9 or v[0] == braking
+    assert v[0] < 0.5
+    assert c[0] == pytest.approx(got_c)
 
 
 def test_a_robot_facing_a_wall_with_the_goal_behind_it_gets_there() -> None:
@@ -168,6 +170,22 @@ def test_four_robots_cross_one_doorway_without_collision_or_deadlock() -> None:
     assert r.min_robot_clearance_m > 0.0
     # lower indices have priority: robot 0 is not slower than robot 3
     assert r.arrival_s[0] <= r.arrival_s[3]
+
+
+def test_head_on_in_a_passage_only_one_fits_through() -> None:
+    # a 2 m long, 0.9 m wide passage: the lower-priority robot makes way, nobody deadlocks
+    occ = _walled(80, 200)
+    occ[:, 80:120] = True
+    occ[31:49, 80:120] = False
+    grid = OccupancyGrid(occ, ~occ, 0.05)
+    poses = np.array([[1.5, 2.0, 0.0], [8.5, 2.0, np.pi]])
+    goals = np.array([[8.5, 2.0], [1.5, 2.0]])
+    params = NavigationParams()
+    r = run(grid, poses, goals, params, 60.0)
+    assert r.state.status == ("arrived", "arrived")
+    assert r.min_wall_clearance_m.min() > 0.0
+    assert r.min_robot_clearance_m > 0.0
+    assert r.arrival_s[0] < r.arrival_s[1]  # robot 0 has the right of way
 
 
 def test_an_unreachable_goal_is_reported_and_the_robot_stays() -> None:

@@ -36,9 +36,12 @@ BASE: dict[str, Any] = {
 
 def test_the_issues_example_parses() -> None:
     s = parse_scenario(copy.deepcopy(BASE))
-    assert s.world is not None and s.world.map == "office"
-    assert s.sensors is not None and s.sensors.lidar is not None
-    assert s.sensors.lidar.beams == 90 and s.sensors.ultrasonic is not None
+    assert s.world is not None
+    assert s.world.map == "office"
+    assert s.sensors is not None
+    assert s.sensors.lidar is not None
+    assert s.sensors.lidar.beams == 90
+    assert s.sensors.ultrasonic is not None
     assert s.command.kind == "navigate"
     assert s.command.goals_m == ((18.0, 7.0), (18.0, 2.0))
 
@@ -59,16 +62,16 @@ def _error(change: Any) -> str:
             "world.map: unknown map 'ofice'; did you mean 'office'",
         ),
         (
-            lambda d: d.update(poses=[[5.0, 2.0, 0.0], [1.0, 3.0, 0.0]]),
-            "poses[0]: (5, 2) is inside a wall",
+            lambda d: d.update(poses=[[4.0, 2.0, 0.0], [1.0, 3.0, 0.0]]),
+            "poses[0]: (4, 2) is inside a wall",
         ),
         (
             lambda d: d.update(poses=[[1.0, 1.0, 0.0], [-3.0, 3.0, 0.0]]),
             "poses[1]: (-3, 3) is off the map",
         ),
         (
-            lambda d: d["command"].update(goals_m=[[18.0, 7.0], [10.0, 2.0]]),
-            "command.goals_m[1]: (10, 2) is inside a wall",
+            lambda d: d["command"].update(goals_m=[[18.0, 7.0], [9.0, 2.0]]),
+            "command.goals_m[1]: (9, 2) is inside a wall",
         ),
         (
             lambda d: d["command"].update(goals_m=[[18.0, 70.0], [18.0, 2.0]]),

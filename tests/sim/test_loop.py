@@ -112,7 +112,7 @@ def test_static_world_steps_the_load_and_the_ideal_link_delivers_as_sent() -> No
     # the load is on from start_s (1e-9 s of slack for k * dt)
     np.testing.assert_array_equal(world.step(state, 1.0 - 1e-12).load_torque_n_m, 0.02)
     sent = {"x_m": np.arange(3.0)}
-    assert IdealLink().exchange(sent) is sent
+    assert IdealLink().exchange(None, sent, 0.0, np.zeros((3, 3)))[0] is sent
 
 
 def _probe(scenario: Scenario) -> tuple[list[Any], None]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -81,7 +82,7 @@ def test_metrics_of_a_crafted_run(tmp_path: Path) -> None:
     pose = np.zeros((x.size, 2, 3))
     pose[:, 0, 0], pose[:, 0, 1] = x, 2.5  # along the pillar's centre line y = 2.5
     pose[:, 1, :2] = (4.5, 2.5 + 0.25)  # robot 2 just above the line, still
-    m = navigate_metrics(_result(scenario, t, pose))
+    m: dict[str, Any] = navigate_metrics(_result(scenario, t, pose))
     # robot 1 to robot 2: |dx|, dy = 0.25; discs overlap when the distance < 0.3
     d12 = np.hypot(x - 4.5, 0.25)
     wall1 = 5.0 - x - 0.15  # pillar face at x = 5 m (the cells 100-119 start at 5.0)
@@ -102,7 +103,7 @@ def test_goal_never_reached_is_zero_and_null(tmp_path: Path) -> None:
     scenario = _scenario(_hall(tmp_path), [[1.0, 1.0, 0.0]], [[9.0, 4.0]])
     pose = np.zeros((3, 1, 3))
     pose[:, 0, :2] = [[1.0, 1.0], [2.0, 1.0], [3.0, 1.0]]
-    m = navigate_metrics(_result(scenario, np.arange(3.0), pose))
+    m: dict[str, Any] = navigate_metrics(_result(scenario, np.arange(3.0), pose))
     assert m["goal_reached"] == [0.0]
     assert math.isnan(m["time_to_goal_s"][0])
     assert m["collisions"] == [0.0]
@@ -141,14 +142,16 @@ def test_a_map_not_tuned_for_reachable_and_unreachable_goals(tmp_path: Path) -> 
     # reachable: bottom-left room to the top-middle room, through two doors
     ok = _scenario(path, [[1.5, 1.5, 0.0]], [[6.0, 5.5]], duration_s=90.0)
     result = simulate(ok)
-    m = compute_metrics(result)
-    assert m["goal_reached"] == [1.0] and m["collisions"] == [0.0]
+    m: dict[str, Any] = dict(compute_metrics(result))
+    assert m["goal_reached"] == [1.0]
+    assert m["collisions"] == [0.0]
     assert result.t[-1] < 90.0  # ended when the robot arrived
     # unreachable: the closed top-right room; reported at once, not waited for
     shut = _scenario(path, [[1.5, 1.5, 0.0]], [[10.0, 5.5]], duration_s=90.0)
     result = simulate(shut)
-    m = compute_metrics(result)
-    assert m["goal_reached"] == [0.0] and math.isnan(m["time_to_goal_s"][0])
+    m = dict(compute_metrics(result))
+    assert m["goal_reached"] == [0.0]
+    assert math.isnan(m["time_to_goal_s"][0])
     assert result.t[-1] < 5.0
 
 
@@ -168,3 +171,20 @@ def test_the_command_line_exits_1_on_an_unreachable_goal(tmp_path: Path) -> None
     bad = text.replace("[[10.0, 5.5]]", "[[8.0, 5.5]]")  # inside the wall at x = 8 m
     (tmp_path / "bad.yaml").write_text(bad, encoding="utf-8")
     assert main(["validate", str(tmp_path / "bad.yaml")]) == 2
+
+
+def test_a_bad_map_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _write_map(tmp_path, _random_rooms(11), "rooms")
+    path.write_text(path.read_text().replace("resolution: 0.05\n", ""), encoding="utf-8")
+    text = (
+        "name: bad\ntitle: t\nduration_s: 1.0\nposes: [[1.5, 1.5, 0.0]]\n"
+        "world: {map: rooms.yaml}\ncommand: {kind: navigate, goals_m: [[2.0, 2.0]]}\n"
+    )
+    (tmp_path / "bad.yaml").write_text(text, encoding="utf-8")
+    capsys.readouterr()
+    assert main(["run", str(tmp_path / "bad.yaml"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "rooms.yaml: key 'resolution' missing" in err

@@ -62,9 +62,7 @@ def test_png_floor_plan_with_alpha_and_colour(tmp_path: Path) -> None:
     rgba[1, :, :3] = 255
     rgba[1, 2, 3] = 0  # transparent: unknown
     Image.fromarray(rgba, "RGBA").save(tmp_path / "plan.png")
-    (tmp_path / "plan.yaml").write_text(
-        TINY_YAML.replace("tiny.pgm", "plan.png"), encoding="utf-8"
-    )
+    (tmp_path / "plan.yaml").write_text(TINY_YAML.replace("tiny.pgm", "plan.png"), encoding="utf-8")
     grid = load_map(tmp_path / "plan.yaml")
     assert grid.occupied.astype(int).tolist() == [[1, 0, 0], [0, 0, 0]]
     assert grid.free.astype(int).tolist() == [[0, 1, 0], [1, 1, 0]]
@@ -145,7 +143,8 @@ def test_office_doors_are_0_9_m_and_sizes_as_documented() -> None:
     office, warehouse, maze = load_map("office"), load_map("warehouse"), load_map("maze")
     assert (office.width_m, office.height_m) == (20.0, 10.0)
     assert (warehouse.width_m, warehouse.height_m) == (30.0, 20.0)
-    assert maze.width_m == pytest.approx(12.0) and maze.height_m == pytest.approx(8.4)
+    assert maze.width_m == pytest.approx(12.0)
+    assert maze.height_m == pytest.approx(8.4)
     # along the corridor's south wall (y = 4.1 m) the gaps are the four doors
     xs = np.arange(0.025, 20.0, 0.05)
     wall = office.occupied_at(np.stack([xs, np.full(xs.size, 4.125)], axis=-1))

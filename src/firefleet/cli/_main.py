@@ -11,6 +11,7 @@
     firefleet fis FILE [--out DIR] [--fix NAME=VALUE ...]
     firefleet fis FILE --eval IN.csv --out OUT.csv
     firefleet thermal FRAME... [--out DIR] [--counts CAL] [--hfov-deg DEG] [--fire-width-m W]
+    firefleet team SCENARIO [--transport zenoh] [--clock lockstep|realtime] [--out DIR] [--seed N]
     firefleet slam LOG [--particles P] [--seed N] [--out DIR] [--fastslam {1,2}]
                    [--association {known,unknown}] [--odometry-noise-scale S]
                    [--heading-drift-sigma RAD_PER_M] [--turn-scale-sigma S] [--no-plots]
@@ -30,7 +31,7 @@ from typing import NoReturn
 from rich.console import Console
 
 import firefleet
-from firefleet.cli import _fis, _run, _slam, _stereo, _thermal
+from firefleet.cli import _fis, _run, _slam, _stereo, _team, _thermal
 from firefleet.cli._console import EXIT_BAD_INPUT, EXIT_OK
 from firefleet.errors import InputError
 
@@ -55,7 +56,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"firefleet {firefleet.__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for group in (_run, _stereo, _fis, _thermal, _slam):  # the order of the help
+    for group in (_run, _stereo, _fis, _thermal, _slam, _team):  # the order of the help
         group.add_parsers(sub)
     for command in sub.choices.values():
         _say_defaults(command)

@@ -173,6 +173,7 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
             mark = "[green]ok" if all_passed(document) else "[red]CLAIM FAILED"
             out.print(f"{scn.name:<24} {mark}  {escape(scn.reproduces)}")
         missing = _section_27(stage, entries, args, out, err)
+        _section_25(stage, entries, out, err)
         seeds = {s.name: s.seed for s in scenarios}
         footer = report_footer(record, seeds)
         index = render_index(entries, version=firefleet.__version__, footer=footer, missing=missing)
@@ -278,6 +279,36 @@ def _section_27(
         + "; ".join(missing)
         + "."
     )
+
+
+def _section_25(stage: Path, entries: list[Any], out: Console, err: Console) -> None:
+    """Section 2.5's study (cooperation over an imperfect link) into the report."""
+    from firefleet.report.html import ReportEntry
+    from firefleet.report.network import link_study_run
+
+    with progress_bar(err, "section 2.5: the link study") as progress:
+        run = link_study_run(progress=progress)
+    folder = stage / run.name
+    folder.mkdir()
+    for name, data_bytes in run.files.items():
+        (folder / name).write_bytes(data_bytes)
+    (folder / "metrics.json").write_text(json_text(run.document), encoding="utf-8")
+    entries.append(
+        ReportEntry(
+            name=run.name,
+            title=run.title,
+            reproduces=run.reproduces,
+            deliverable_says=run.deliverable_says,
+            folder=run.name,
+            figures=run.figures,
+            document=run.document,
+            command=run.command,
+            links=("metrics.json",),
+            captions=run.captions,
+        )
+    )
+    mark = "[green]ok" if all_passed(run.document) else "[red]CLAIM FAILED"
+    out.print(f"{run.name:<24} {mark}  {escape(run.reproduces)}")
 
 
 def report_footer(record: Mapping[str, Any], seeds: Mapping[str, int]) -> str:

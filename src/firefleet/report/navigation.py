@@ -11,6 +11,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.patches import Circle
 
 from firefleet._typing import FloatArray
 from firefleet.sim.result import SimResult
@@ -46,13 +47,17 @@ def _map(ax: Axes, grid: OccupancyGrid, occupancy: FloatArray | None = None) -> 
     ax.set_ylabel("y [m]")
 
 
-def _discs(ax: Axes, pose: FloatArray, radius_m: float, colours: list[tuple[float, ...]]) -> None:
+def _discs(
+    ax: Axes, pose: FloatArray, radius_m: float, colours: list[tuple[float, float, float, float]]
+) -> None:
     for i, (x, y, th) in enumerate(pose):
-        ax.add_patch(plt.Circle((x, y), radius_m, fill=False, color=colours[i], lw=1.2))
+        ax.add_patch(Circle((x, y), radius_m, fill=False, color=colours[i], lw=1.2))
         ax.plot([x, x + radius_m * np.cos(th)], [y, y + radius_m * np.sin(th)], color=colours[i])
 
 
-def _rays(ax: Axes, result: SimResult, k: int, colours: list[tuple[float, ...]]) -> None:
+def _rays(
+    ax: Axes, result: SimResult, k: int, colours: list[tuple[float, float, float, float]]
+) -> None:
     """Each robot's range readings at sample ``k``: a ray to each return (dots at the
     hit), faint rays to the range limit where nothing came back."""
     from firefleet.sim.kinds.navigate import reading_bearings, reading_limits
@@ -95,7 +100,9 @@ def overview_png(result: SimResult) -> bytes:
     occupancy = result.extra.get("occupancy")
     wide = grid.width_m / grid.height_m
     fig = plt.figure(figsize=(11, 4.2 + 11 / (3 * wide) + 0.6), layout="constrained")
-    top, bottom = fig.subfigures(2, 1, height_ratios=[1.6, 1])
+    subs = fig.subfigures(2, 1, height_ratios=[1.6, 1])
+    assert isinstance(subs, np.ndarray)  # two subfigures
+    top, bottom = subs
     axes_top = top.subplots(1, 2 if occupancy is not None else 1, squeeze=False)[0]
     ax = axes_top[0]
     _map(ax, grid)
@@ -111,9 +118,11 @@ def overview_png(result: SimResult) -> bytes:
         ax.plot(*xy[0], "o", color=colours[i], ms=6)
         ax.plot(*cmd.goals_m[i], "*", color=colours[i], ms=13, mec="k", mew=0.6)
         ax.add_patch(
-            plt.Circle(cmd.goals_m[i], cmd.goal_tolerance_m, fill=False, color=colours[i], ls=":")
+            Circle(cmd.goals_m[i], cmd.goal_tolerance_m, fill=False, color=colours[i], ls=":")
         )
     _discs(ax, result.pose[-1], cmd.robot_radius_m, colours)
+    ax.set_xlim(grid.extent_m[:2])
+    ax.set_ylim(grid.extent_m[2:])
     estimate = "estimate (dashed)" if cmd.localisation != "odometry" else "odometry (dotted)"
     ax.set_title(
         f"{result.scenario.name}: true paths (solid), {estimate}, start o, goal *; "
@@ -130,7 +139,16 @@ def overview_png(result: SimResult) -> bytes:
         _rays(ax_s, result, k, colours)
         _discs(ax_s, result.pose[k], cmd.robot_radius_m, colours)
         ax_s.set_title(f"t = {result.t[k]:.1f} s: robots and their range readings", fontsize=8)
+        _zoom(ax_s, grid, result.pose[..., :2])
     return _png(fig)
+
+
+def _zoom(ax: Axes, grid: OccupancyGrid, xy_m: FloatArray, margin_m: float = 1.5) -> None:
+    """Limit the axes to where the robots went (plus ``margin_m``), within the map."""
+    x0, x1, y0, y1 = grid.extent_m
+    pts = np.asarray(xy_m).reshape(-1, 2)
+    ax.set_xlim(max(x0, pts[:, 0].min() - margin_m), min(x1, pts[:, 0].max() + margin_m))
+    ax.set_ylim(max(y0, pts[:, 1].min() - margin_m), min(y1, pts[:, 1].max() + margin_m))
 
 
 def _instants(size: int, count: int) -> list[int]:
@@ -153,6 +171,8 @@ def animation_gif(result: SimResult, *, frames: int = _FRAMES) -> bytes:
         fig = plt.figure(figsize=(6.0, 6.0 / wide + 0.5), layout="constrained")
         ax = fig.subplots()
         _map(ax, grid)
+        ax.set_xlim(grid.extent_m[:2])
+        ax.set_ylim(grid.extent_m[2:])
         for i in range(n):
             ax.plot(result.pose[: k + 1, i, 0], result.pose[: k + 1, i, 1], color=colours[i])
             ax.plot(*cmd.goals_m[i], "*", color=colours[i], ms=10, mec="k", mew=0.5)
@@ -160,7 +180,7 @@ def animation_gif(result: SimResult, *, frames: int = _FRAMES) -> bytes:
         _discs(ax, result.pose[k], cmd.robot_radius_m, colours)
         ax.set_title(f"{result.scenario.name}  t = {result.t[k]:.1f} s", fontsize=9)
         images.append(
-            Image.open(io.BytesIO(_png(fig, dpi=60))).convert(
+            Image.open(io.BytesIO(_png(fig, dpi=80))).convert(
                 "P", palette=Image.Palette.ADAPTIVE, colors=64
             )
         )

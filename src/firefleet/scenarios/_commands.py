@@ -72,6 +72,13 @@ class PathFollowing:
     controller_fis, lambda_fis : str
         MATLAB ``.fis`` files of the main system and of the lambda correction; empty
         for the built-in ones (``firefleet.control.path_following``).
+    coordination : {"closed", "clock"}
+        ``closed``: each robot broadcasts its progress and no robot's desired point
+        runs more than ``lead_segments`` ahead of the slowest progress it has heard
+        (``firefleet.sim.kinds.path_following``); ``clock``: the open-loop common
+        release schedule alone (2.6.3).
+    lead_segments : int
+        The closed law's bound [segments].
     """
 
     kind: Literal["path-following"]
@@ -81,8 +88,12 @@ class PathFollowing:
     arrival_radius_m: float = 0.05
     controller_fis: str = ""
     lambda_fis: str = ""
+    coordination: Literal["closed", "clock"] = "closed"
+    lead_segments: int = 10
 
     def __post_init__(self) -> None:
+        if self.lead_segments < 1:
+            raise InputError(f"command.lead_segments must be >= 1, got {self.lead_segments}")
         if not self.paths:
             raise InputError("paths: at least one path")
         if not (math.isfinite(self.trajectory_s) and self.trajectory_s > 0):

@@ -193,10 +193,10 @@ def check_world(
     >>> from firefleet.errors import InputError
     >>> from firefleet.scenarios._world import WorldSpec, check_world
     >>> try:
-    ...     check_world(WorldSpec(map="office"), None, ((5.0, 2.0, 0.0),), None)
+    ...     check_world(WorldSpec(map="office"), None, ((4.0, 2.0, 0.0),), None)
     ... except InputError as error:
     ...     print(error)
-    poses[0]: (5, 2) is inside a wall of map 'office'
+    poses[0]: (4, 2) is inside a wall of map 'office'
     """
     navigate = command if isinstance(command, Navigate) else None
     if world is None:

@@ -44,6 +44,7 @@ from firefleet.scenarios._commands import (
     VoltageStep,
     WheelSpeedStep,
 )
+from firefleet.scenarios._network import LinkSpec, MotorFault
 from firefleet.scenarios._world import (
     LidarSpec,
     Navigate,
@@ -60,7 +61,9 @@ __all__ = [
     "Formation",
     "LeaderPath",
     "LidarSpec",
+    "LinkSpec",
     "LoadStep",
+    "MotorFault",
     "Navigate",
     "PathFollowing",
     "RobotFailure",
@@ -124,6 +127,10 @@ class Scenario:
         Hardware and low-level control; defaults from the deliverable's Table 2.
     load : LoadStep
         Load torque on the wheel motors.
+    faults : tuple of MotorFault
+        Motor faults (a robot's motors at a fraction of their voltage for a while).
+    link : LinkSpec, optional
+        The team's wireless link (``firefleet.sim.link``); None: ideal.
     world : WorldSpec, optional
         The building (a map); None: an empty plane.
     sensors : SensorsSpec, optional
@@ -155,6 +162,8 @@ class Scenario:
     encoder: EncoderParams = field(default_factory=EncoderParams)
     speed_pid: PidParams = field(default_factory=PidParams)
     load: LoadStep = field(default_factory=LoadStep)
+    faults: tuple[MotorFault, ...] = ()
+    link: LinkSpec | None = None
     world: WorldSpec | None = None
     sensors: SensorsSpec | None = None
     reproduces: str = ""
@@ -184,6 +193,12 @@ class Scenario:
             )
         if self.seed < 0:
             raise InputError(f"seed must be >= 0, got {self.seed}")
+        for fault in self.faults:
+            if fault.robot > self.n_robots:
+                raise InputError(
+                    f"faults.robot = {fault.robot}, but the scenario has {self.n_robots} "
+                    "robot(s) (poses)"
+                )
         self.command.check_team(self.n_robots, self.duration_s)  # each command's own rule
         check_world(self.world, self.sensors, self.poses, self.command)
         known = _metric_names(self.command.kind)

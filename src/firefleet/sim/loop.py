@@ -41,7 +41,9 @@ from numpy.typing import NDArray
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
-from firefleet.scenarios.schema import Scenario
+from firefleet.scenarios.schema import MotorFault, Scenario
+from firefleet.sim._link_stage import IdealLink, Link, link_impaired
+from firefleet.sim._recorder import Recorder, Recording
 from firefleet.sim.drive import (
     DriveStack,
     DriveState,
@@ -60,6 +62,7 @@ __all__ = [
     "Decider",
     "FusedRun",
     "IdealLink",
+    "Link",
     "NoEstimation",
     "NoSensors",
     "Odometry",
@@ -97,9 +100,13 @@ class WorldState:
     ----------
     load_torque_n_m : ndarray, shape (N, 2)
         Load torque on each wheel motor [N m], held over the tick.
+    voltage_scale : ndarray, shape (N,), or None
+        The fraction of its commanded voltage each robot's motors get (a motor fault);
+        None: all of it.
     """
 
     load_torque_n_m: FloatArray
+    voltage_scale: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -112,10 +119,14 @@ class StaticWorld:
         Load torque on every wheel motor from ``start_s`` on [N m] (0 before).
     start_s : float
         Time of the load step [s].
+    faults : tuple of MotorFault
+        Motor faults: robot ``robot`` (from 1) gets ``voltage_scale`` of its voltage
+        from ``start_s`` (included) to ``end_s`` (excluded).
     """
 
     torque_n_m: float = 0.0
     start_s: float = 0.0
+    faults: tuple[MotorFault, ...] = ()
 
     def init(self, n_robots: int) -> WorldState:
         """The world before the first tick."""
@@ -124,7 +135,15 @@ class StaticWorld:
     def step(self, state: WorldState, t_s: float) -> WorldState:
         """The world at ``t_s``."""
         tau = self.torque_n_m if t_s >= self.start_s - 1e-9 else 0.0
-        return WorldState(load_torque_n_m=np.full(state.load_torque_n_m.shape, tau))
+        scale = None
+        for fault in self.faults:
+            if fault.start_s - 1e-9 <= t_s < fault.end_s - 1e-9:
+                if scale is None:
+                    scale = np.ones(state.load_torque_n_m.shape[0])
+                scale[fault.robot - 1] *= fault.voltage_scale
+        return WorldState(
+            load_torque_n_m=np.full(state.load_torque_n_m.shape, tau), voltage_scale=scale
+        )
 
 
 @dataclass(frozen=True)
@@ -149,15 +168,6 @@ class Sensors(Protocol):
     """The sensors of the loop: readings by name from the world and the true state."""
 
     def read(self, world: WorldState, drive: DriveState) -> Messages: ...
-
-
-@dataclass(frozen=True)
-class IdealLink:
-    """Every message arrives, unchanged, at the next tick."""
-
-    def exchange(self, sent: Messages) -> Messages:
-        """The messages delivered this tick: all those sent last tick."""
-        return sent
 
 
 @dataclass(frozen=True)
@@ -222,7 +232,7 @@ class Stages:
 
     world: StaticWorld
     sensors: Sensors = field(default_factory=NoSensors)
-    link: IdealLink = field(default_factory=IdealLink)
+    link: Link = field(default_factory=IdealLink)
     estimation: Estimation = field(default_factory=Odometry)
 
     def names(self) -> dict[str, str]:
@@ -345,8 +355,18 @@ def default_stages(scenario: Scenario, decider: Decider) -> Stages:
     >>> default_stages(scenario, decider).names()
     {'world': 'StaticWorld', 'sensors': 'NoSensors', 'link': 'IdealLink', 'estimation': 'Odometry'}
     """
+    link: Link = IdealLink()
+    if link_impaired(scenario):
+        from firefleet.sim.link import LinkModel  # the link imports this module's types
+
+        link = LinkModel.from_spec(scenario.link, seed=scenario.seed)
     return Stages(
-        world=StaticWorld(torque_n_m=scenario.load.torque_n_m, start_s=scenario.load.start_s),
+        world=StaticWorld(
+            torque_n_m=scenario.load.torque_n_m,
+            start_s=scenario.load.start_s,
+            faults=scenario.faults,
+        ),
+        link=link,
         estimation=Odometry() if decider.uses_estimate else NoEstimation(),
     )
 
@@ -426,7 +446,9 @@ def run_loop(
     phase = encoder_phase(scenario.encoder, n, rng)
     if make_stages is not None:
         stages = make_stages(scenario, decider, rng)
-    if fused is not None and stages is None:
+    # the fused loops run the ideal link; of them only path following's knows faults
+    fault_free = not scenario.faults or scenario.command.kind == "path-following"
+    if fused is not None and stages is None and not link_impaired(scenario) and fault_free:
         return fused(scenario, phase, rec_steps, progress)
 
     stg = stages if stages is not None else default_stages(scenario, decider)
@@ -454,38 +476,6 @@ def run_loop(
             **rec.final,
         },
     )
-
-
-@dataclass(frozen=True)
-class Recording:
-    """The samples of a staged run (T recorded ticks, N robots).
-
-    Attributes
-    ----------
-    t_s : ndarray, shape (T,)
-        Time [s].
-    pose : ndarray, shape (T, N, 3)
-        True poses.
-    wheel_speed_rad_s, wheel_speed_measured_rad_s, wheel_speed_ref_rad_s, current_a, \
-voltage_v, load_torque_n_m : ndarray, shape (T, N, 2)
-        The wheel stack's quantities (as :class:`~firefleet.sim.result.SimResult`).
-    series : dict of str to ndarray
-        The decision's series (and the estimator's, if it has ``series(state)``) by
-        name, time first.
-    final : dict of str to ndarray
-        What the estimator gives at the end (``final(state)``, if it has one: a map).
-    """
-
-    t_s: FloatArray
-    pose: FloatArray
-    wheel_speed_rad_s: FloatArray
-    wheel_speed_measured_rad_s: FloatArray
-    wheel_speed_ref_rad_s: FloatArray
-    current_a: FloatArray
-    voltage_v: FloatArray
-    load_torque_n_m: FloatArray
-    series: dict[str, FloatArray]
-    final: dict[str, FloatArray] = field(default_factory=dict)
 
 
 def run_staged(
@@ -548,14 +538,15 @@ def run_staged(
     world = stages.world.init(n)
     estimate = stages.estimation.init(drive.pose, drive)
     sent: Messages = {}
-    rec = _Recorder(rec_steps, n)
+    link = stages.link.init(n, dt)
+    rec = Recorder(rec_steps, n)
     estimation_series = getattr(stages.estimation, "series", None)
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         for k in range(int(k0), int(k1)):
             t = k * dt
             world = stages.world.step(world, t)
             readings = stages.sensors.read(world, drive)
-            inbox = stages.link.exchange(sent)
+            inbox, link = stages.link.exchange(link, sent, t, drive.pose)
             if k > 0:  # the encoders have counted since the last tick
                 estimate = stages.estimation.step(estimate, drive, stack, readings)
             inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
@@ -569,7 +560,11 @@ def run_staged(
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
             else:
                 voltage = command.voltage_v
-            rec.record(k, drive, command, voltage, world, force=command.done)
+            if world.voltage_scale is not None:  # a motor fault
+                voltage = voltage * world.voltage_scale[:, None]
+            rec.record(
+                k, drive, command, voltage, world, stages.link.counters(link), force=command.done
+            )
             if k == n_steps or command.done:
                 break
             drive = drive_step(
@@ -581,63 +576,3 @@ def run_staged(
             break
     final = getattr(stages.estimation, "final", None)
     return rec.recording(dt, final(estimate) if final is not None else {})
-
-
-class _Recorder:
-    """The samples of a run, written at the ticks to record."""
-
-    def __init__(self, rec_steps: NDArray[np.int64], n_robots: int) -> None:
-        self.rec_steps = rec_steps
-        self.recorded: list[int] = []
-        self.row = 0
-        size = rec_steps.size
-        self.pose = np.empty((size, n_robots, 3))
-        self.wheel = {
-            name: np.empty((size, n_robots, 2))
-            for name in ("speed", "measured", "ref", "current", "voltage", "load")
-        }
-        self.series: dict[str, FloatArray] = {}
-
-    def record(
-        self,
-        k: int,
-        drive: DriveState,
-        command: WheelCommand,
-        voltage: FloatArray,
-        world: WorldState,
-        *,
-        force: bool = False,
-    ) -> None:
-        """Record tick ``k`` if it is the next to record (or ``force``: the last)."""
-        row = self.row
-        if row >= self.rec_steps.size or (self.rec_steps[row] != k and not force):
-            return
-        self.recorded.append(k)
-        self.pose[row] = drive.pose
-        self.wheel["speed"][row] = drive.speed_rad_s
-        self.wheel["measured"][row] = drive.measured_rad_s
-        self.wheel["ref"][row] = command.reference_rad_s
-        self.wheel["current"][row] = drive.current_a
-        self.wheel["voltage"][row] = voltage
-        self.wheel["load"][row] = world.load_torque_n_m
-        for name, value in command.series.items():
-            if name not in self.series:
-                self.series[name] = np.empty((self.rec_steps.size, *np.shape(value)))
-            self.series[name][row] = value
-        self.row += 1
-
-    def recording(self, dt_s: float, final: Messages) -> Recording:
-        """The samples recorded (fewer than planned if the task ended early)."""
-        m = self.row
-        return Recording(
-            t_s=np.asarray(np.array(self.recorded, dtype=np.int64) * dt_s, dtype=np.float64),
-            pose=self.pose[:m],
-            wheel_speed_rad_s=self.wheel["speed"][:m],
-            wheel_speed_measured_rad_s=self.wheel["measured"][:m],
-            wheel_speed_ref_rad_s=self.wheel["ref"][:m],
-            current_a=self.wheel["current"][:m],
-            voltage_v=self.wheel["voltage"][:m],
-            load_torque_n_m=self.wheel["load"][:m],
-            series={name: value[:m] for name, value in self.series.items()},
-            final=dict(final),
-        )

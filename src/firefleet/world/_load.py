@@ -81,7 +81,7 @@ def load_map(source: str | Path) -> OccupancyGrid:
     >>> grid = load_map("office")
     >>> grid.shape, grid.resolution_m, grid.width_m, grid.height_m
     ((200, 400), 0.05, 20.0, 10.0)
-    >>> grid.occupied_at([[2.5, 5.0], [5.0, 2.0]]).tolist()  # the corridor, a wall
+    >>> grid.occupied_at([[2.5, 5.0], [4.0, 2.0]]).tolist()  # the corridor, a wall
     [False, True]
     """
     text = str(source)

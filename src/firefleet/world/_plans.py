@@ -57,7 +57,10 @@ def _outline(width_m: float, height_m: float) -> BoolArray:
 
 def office() -> BoolArray:
     """An office floor, 20 m x 10 m: a corridor along x (y 4.2-5.8 m) between four
-    rooms on each side (5 m wide), each with a 0.9 m door on the corridor.
+    rooms on each side, of unequal widths (south: walls at x 4, 9, 15 m; north: 6, 10,
+    14 m), each with a 0.9 m door on the corridor off its centre, a cabinet in the
+    south-west room and a pillar in the north-east one: no two places look alike, so a
+    robot can localise on it (a symmetric plan would leave MCL two equal answers).
 
     Examples
     --------
@@ -70,14 +73,16 @@ def office() -> BoolArray:
     low, high = 4.2, 5.8  # the corridor's walls, inner faces
     _box(occupied, 0.0, low - _WALL_M, width, low)
     _box(occupied, 0.0, high, width, high + _WALL_M)
-    for k in range(1, 4):  # walls between rooms
-        x = 5.0 * k
+    for x in (4.0, 9.0, 15.0):  # walls between the south rooms
         _box(occupied, x - _WALL_M / 2, 0.0, x + _WALL_M / 2, low)
+    for x in (6.0, 10.0, 14.0):  # and between the north rooms
         _box(occupied, x - _WALL_M / 2, high, x + _WALL_M / 2, height)
-    for k in range(4):  # a door in the middle of each room's corridor wall
-        x = 5.0 * k + 2.5
+    for x in (2.0, 6.0, 12.5, 17.0):  # the south rooms' doors (centres)
         _clear(occupied, x - door / 2, low - _WALL_M, x + door / 2, low)
+    for x in (3.0, 8.5, 11.5, 17.5):  # the north rooms' doors
         _clear(occupied, x - door / 2, high, x + door / 2, high + _WALL_M)
+    _box(occupied, 0.6, 0.15, 1.6, 0.75)  # a cabinet against the south wall
+    _box(occupied, 18.0, 8.0, 18.4, 8.4)  # a pillar
     return occupied
 
 

@@ -4,10 +4,9 @@ Moving from cell ``a`` to a neighbour ``b`` costs ``step * (cost[a] + cost[b]) /
 with ``step`` the resolution (4 sides) or ``sqrt(2)`` times it (4 diagonals); a diagonal
 move needs both cells it passes between to be open too, so no path cuts a corner or
 slips through a diagonal gap in a wall. The heuristic is the octile distance times the
-smallest cost per metre (1), admissible and consistent, so the path is optimal. Ties
-in ``f`` are broken towards the larger ``g`` (nearer the goal), which expands fewer
-cells on open floors. The heap holds stale entries (lazy deletion) instead of a
-decrease-key.
+smallest cost per metre (1), admissible and consistent, so the path is optimal. The
+heap holds stale entries (lazy deletion) instead of a decrease-key; the grid is copied
+once into a flat array with a blocked border, so the inner loop checks no bounds.
 
 References
 ----------
@@ -22,7 +21,7 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from firefleet._typing import FloatArray, IntArray
 from firefleet.control.navigation._costmap import Costmap
@@ -30,52 +29,45 @@ from firefleet.errors import InputError
 
 __all__ = ["AStarResult", "astar", "astar_cells"]
 
-_SQRT2 = math.sqrt(2.0)
-
 
 @numba.njit(cache=True)
 def _heap_push(
-    keys: FloatArray, ties: FloatArray, items: IntArray, size: int, k: float, t: float, item: int
+    keys: FloatArray, items: NDArray[np.int32], size: int, key: float, item: int
 ) -> int:  # pragma: no cover - compiled
+    """Insert into the binary min-heap ``keys[:size]`` (a hole sifted up); new size."""
     i = size
-    keys[i] = k
-    ties[i] = t
-    items[i] = item
     while i > 0:
-        p = (i - 1) // 2
-        if keys[p] < keys[i] or (keys[p] == keys[i] and ties[p] <= ties[i]):
+        p = (i - 1) >> 1
+        if keys[p] <= key:
             break
-        keys[p], keys[i] = keys[i], keys[p]
-        ties[p], ties[i] = ties[i], ties[p]
-        items[p], items[i] = items[i], items[p]
+        keys[i] = keys[p]
+        items[i] = items[p]
         i = p
+    keys[i] = key
+    items[i] = item
     return size + 1
 
 
 @numba.njit(cache=True)
-def _heap_pop(keys: FloatArray, ties: FloatArray, items: IntArray, size: int) -> int:
-    # pragma: no cover - compiled; moves the last entry to the root and sifts it down
+def _heap_pop(keys: FloatArray, items: NDArray[np.int32], size: int) -> int:  # pragma: no cover
+    """Remove the root (the last entry sifted down from the top); new size."""
     size -= 1
-    keys[0] = keys[size]
-    ties[0] = ties[size]
-    items[0] = items[size]
+    key = keys[size]
+    item = items[size]
     i = 0
     while True:
-        left = 2 * i + 1
-        if left >= size:
+        c = 2 * i + 1
+        if c >= size:
             break
-        c = left
-        right = left + 1
-        if right < size and (
-            keys[right] < keys[left] or (keys[right] == keys[left] and ties[right] < ties[left])
-        ):
-            c = right
-        if keys[i] < keys[c] or (keys[i] == keys[c] and ties[i] <= ties[c]):
+        if c + 1 < size and keys[c + 1] < keys[c]:
+            c += 1
+        if key <= keys[c]:
             break
-        keys[c], keys[i] = keys[i], keys[c]
-        ties[c], ties[i] = ties[i], ties[c]
-        items[c], items[i] = items[i], items[c]
+        keys[i] = keys[c]
+        items[i] = items[c]
         i = c
+    keys[i] = key
+    items[i] = item
     return size
 
 
@@ -93,28 +85,23 @@ def _astar_kernel(
         for c in range(w):
             cf[(r + 1) * wp + c + 1] = cost[r, c]
     g = np.full(n, np.inf)
-    parent = np.full(n, -1, dtype=np.int64)
+    parent = np.full(n, -1, dtype=np.int32)
     closed = np.zeros(n, dtype=np.bool_)
-    cap = 4096
+    cap = 1 << 16
     keys = np.empty(cap)
-    ties = np.empty(cap)
-    items = np.empty(cap, dtype=np.int64)
-    offs = np.array([-wp - 1, -wp, -wp + 1, -1, 1, wp - 1, wp, wp + 1])
-    diag = (True, False, True, False, False, True, False, True)
+    items = np.empty(cap, dtype=np.int32)
     sq2 = math.sqrt(2.0)
+    hd = res * (sq2 - 1.0)
     start = (sr + 1) * wp + sc + 1
     goal = (gr + 1) * wp + gc + 1
     g[start] = 0.0
-    dy0 = abs(sr - gr)
-    dx0 = abs(sc - gc)
-    h0 = res * (max(dx0, dy0) + (sq2 - 1.0) * min(dx0, dy0))
-    size = _heap_push(keys, ties, items, 0, h0, h0, start)
+    size = _heap_push(keys, items, 0, 0.0, start)
     expanded = 0
     while size > 0:
         cur = items[0]
-        size = _heap_pop(keys, ties, items, size)
+        size = _heap_pop(keys, items, size)
         if closed[cur]:
-            continue
+            continue  # a stale entry (lazy deletion)
         closed[cur] = True
         expanded += 1
         if cur == goal:
@@ -122,15 +109,31 @@ def _astar_kernel(
         gcur = g[cur]
         ccur = cf[cur]
         for k in range(8):
-            nxt = cur + offs[k]
+            # neighbours: 0 1 2 / 3 . 4 / 5 6 7
+            if k == 0:
+                o = -wp - 1
+            elif k == 1:
+                o = -wp
+            elif k == 2:
+                o = -wp + 1
+            elif k == 3:
+                o = -1
+            elif k == 4:
+                o = 1
+            elif k == 5:
+                o = wp - 1
+            elif k == 6:
+                o = wp
+            else:
+                o = wp + 1
+            nxt = cur + o
             cn = cf[nxt]
             if cn == np.inf or closed[nxt]:
                 continue
             step = res
-            if diag[k]:
+            if k == 0 or k == 2 or k == 5 or k == 7:
                 # no corner cutting: both cells the diagonal passes between must be open
-                o = offs[k]
-                dcol = 1 if (o == -wp + 1 or o == wp + 1) else -1
+                dcol = 1 if (k == 2 or k == 7) else -1
                 if cf[cur + dcol] == np.inf or cf[nxt - dcol] == np.inf:
                     continue
                 step = res * sq2
@@ -141,17 +144,16 @@ def _astar_kernel(
                 nr = nxt // wp
                 ddy = abs(nr - 1 - gr)
                 ddx = abs(nxt - nr * wp - 1 - gc)
-                hn = res * (max(ddx, ddy) + (sq2 - 1.0) * min(ddx, ddy))
+                hn = res * max(ddx, ddy) + hd * min(ddx, ddy)
                 if size == cap:
                     cap *= 2
                     keys2 = np.empty(cap)
-                    ties2 = np.empty(cap)
-                    items2 = np.empty(cap, dtype=np.int64)
+                    items2 = np.empty(cap, dtype=np.int32)
                     keys2[:size] = keys[:size]
-                    ties2[:size] = ties[:size]
                     items2[:size] = items[:size]
-                    keys, ties, items = keys2, ties2, items2
-                size = _heap_push(keys, ties, items, size, gn + hn, hn, nxt)
+                    keys = keys2
+                    items = items2
+                size = _heap_push(keys, items, size, gn + hn, nxt)
     if not closed[goal]:
         return np.empty((0, 2), dtype=np.int64), np.inf, expanded
     count = 1
@@ -167,6 +169,11 @@ def _astar_kernel(
         out[i, 1] = cur - rr * wp - 1
         cur = parent[cur]
     return out, g[goal], expanded
+
+
+def _check_size(shape: tuple[int, ...]) -> None:
+    if (shape[0] + 2) * (shape[1] + 2) >= 2**31:
+        raise InputError(f"a {shape[0]} x {shape[1]} grid is too large to plan on (< 2^31 cells)")
 
 
 def astar_cells(
@@ -202,6 +209,7 @@ def astar_cells(
     if c.ndim != 2:
         raise InputError(f"cost must be an (H, W) grid, got shape {c.shape}")
     c = np.where(np.isnan(c), np.inf, c)
+    _check_size(c.shape)
     h, w = c.shape
     for name, (r, col) in (("start", start), ("goal", goal)):
         if not (0 <= r < h and 0 <= col < w):
@@ -287,6 +295,7 @@ def astar(costmap: Costmap, start_xy_m: ArrayLike, goal_xy_m: ArrayLike) -> ASta
         if not inside[k] or costmap.blocked[r, c]:
             return AStarResult(f"{name}_blocked", None, None, math.inf)
     cost = np.ascontiguousarray(costmap.cost)
+    _check_size(cost.shape)
     cells, total, _ = _astar_kernel(
         cost, int(rc[0, 0]), int(rc[0, 1]), int(rc[1, 0]), int(rc[1, 1]), grid.resolution_m
     )

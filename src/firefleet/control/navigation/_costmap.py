@@ -7,7 +7,8 @@ kernel. Every other cell costs ``1 + wall_weight * exp(-(c - inflation_m) / wall
 per metre travelled, with ``c`` its clearance (the same distance [m]): the cost falls
 from ``1 + wall_weight`` at the edge of the inflated region to 1 in open space, so
 robots keep off walls where there is room and still squeeze through doors (the shape of
-ROS ``costmap_2d``'s inflation layer).
+ROS ``costmap_2d``'s inflation layer; the default decay, 0.1 m, is its default
+``cost_scaling_factor`` of 10 per metre).
 
 References
 ----------
@@ -59,8 +60,8 @@ def build_costmap(
     grid: OccupancyGrid,
     inflation_m: float,
     *,
-    wall_weight: float = 4.0,
-    wall_decay_m: float = 0.25,
+    wall_weight: float = 2.0,
+    wall_decay_m: float = 0.1,
 ) -> Costmap:
     """Inflate a map by the robot's disc and price the cells near walls.
 

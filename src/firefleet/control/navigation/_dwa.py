@@ -19,7 +19,8 @@ command near obstacles. Per robot and control period ``dt``:
    a robot already touching may still move out).
 4. Admissible: ``v <= sqrt(2 a d)``, the robot can stop before that contact (Fox's
    admissible velocities). Turning on the spot never moves a disc into contact, so the
-   set is never empty once ``v0 <= a dt``.
+   set is never empty once ``v0 <= a dt``; when it is, the slowest candidate (the
+   clearest of those) brakes as hard as the window allows.
 5. Score ``- ((v - v_ref) / v_max)^2 - ((omega - omega_ref) / omega_max)^2 +
    w_clear min(c, c_cap) / c_cap``: the reference itself wins when its arc keeps
    ``c >= c_cap``.
@@ -116,7 +117,7 @@ class DwaParams:
     n_omega: int = 21
     n_steps: int = 15
     clearance_cap_m: float = 0.25
-    clearance_weight: float = 1.0
+    clearance_weight: float = 0.1
 
     def __post_init__(self) -> None:
         check_fields(
@@ -245,9 +246,13 @@ def _dwa_one(
         hi = min(w0 + b, lim)
     wr = min(max(w_ref, lo), hi)
     best = -np.inf
-    best_v = v0 if v_lo <= v0 else v_lo
+    best_v = v_lo
     best_w = w0
     best_c = -np.inf
+    fb_score = -np.inf
+    fb_v = v_lo
+    fb_w = w0
+    fb_c = -np.inf
     for iv in range(n_v + 1):
         if iv < n_v:
             v = v_lo + (v_hi - v_lo) * iv / (n_v - 1)
@@ -265,6 +270,14 @@ def _dwa_one(
             w = (lo + (hi - lo) * iw / (count - 1) if hi > lo else lo) if iv < n_v else wr
             c, travel = _evaluate(pose, v, w, obs, rad, radius, horizon, n_steps)
             if travel != np.inf and v > math.sqrt(2.0 * aw * travel) + 1e-12:
+                # inadmissible; remembered in case nothing is: the slowest, then the
+                # clearest
+                fallback = -v * 1e6 + min(c, 1e3)
+                if fallback > fb_score:
+                    fb_score = fallback
+                    fb_v = v
+                    fb_w = w
+                    fb_c = c
                 continue
             score = (
                 -(((v - v_ref) / v_max) ** 2)
@@ -276,6 +289,8 @@ def _dwa_one(
                 best_v = v
                 best_w = w
                 best_c = c
+    if best == -np.inf:  # nothing admissible: brake as hard as the window allows
+        return fb_v, fb_w, fb_c
     return best_v, best_w, best_c
 
 

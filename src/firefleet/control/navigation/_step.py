@@ -49,6 +49,32 @@ def _range_points(inputs: NavigationInputs, pose: FloatArray, reach_m: float) ->
     return np.concatenate(blocks, axis=1)
 
 
+_MAX_WALL_POINTS = 400
+"""Most known wall cells given to DWA per robot (the nearest)."""
+
+
+def _near_walls(
+    state: NavigationState, pose: FloatArray, reach_m: float
+) -> tuple[FloatArray, float]:
+    """The known wall cells within reach of each robot (N, M, 2), padded far, and the
+    radius of the disc covering a cell [m]."""
+    n = pose.shape[0]
+    pts = state.wall_points_m
+    radius = state.costmap.grid.resolution_m * math.sqrt(0.5)
+    if len(pts) == 0:
+        return np.full((n, 1, 2), _FAR), radius
+    out = np.full((n, _MAX_WALL_POINTS, 2), _FAR)
+    used = 1
+    for i in range(n):
+        d = np.hypot(pts[:, 0] - pose[i, 0], pts[:, 1] - pose[i, 1])
+        near = np.nonzero(d <= reach_m)[0]
+        if len(near) > _MAX_WALL_POINTS:
+            near = near[np.argpartition(d[near], _MAX_WALL_POINTS - 1)[:_MAX_WALL_POINTS]]
+        out[i, : len(near)] = pts[near]
+        used = max(used, len(near))
+    return out[:, :used], radius
+
+
 def _conflict(
     mine: FloatArray, theirs: FloatArray, me: FloatArray, gap_m: float
 ) -> tuple[bool, bool]:
@@ -56,6 +82,50 @@ def _conflict(
     d = np.hypot(mine[:, None, 0] - theirs[None, :, 0], mine[:, None, 1] - theirs[None, :, 1])
     in_way = bool(np.min(np.hypot(theirs[:, 0] - me[0], theirs[:, 1] - me[1])) < gap_m)
     return bool(d.min() < gap_m), in_way
+
+
+def _aside_spot(
+    state: NavigationState,
+    params: NavigationParams,
+    pose: FloatArray,
+    mates: FloatArray,
+    i: int,
+    j: int,
+    rest: FloatArray,
+    gap: float,
+) -> FloatArray | None:
+    """The nearest open spot (within 3 m of robot ``i``) that keeps ``gap`` + the goal
+    tolerance + 0.1 m (so a robot arrived near it is out of the way) from
+    teammate ``j``'s remaining path ``rest`` (K, 2) and from every other robot, and
+    that ``i`` can reach around ``j``; None if there is none."""
+    grid = state.costmap.grid
+    reach = round(3.0 / grid.resolution_m)
+    rc = grid.cell_of(pose[i, :2])
+    h, w = grid.shape
+    r0, r1 = max(rc[0] - reach, 0), min(rc[0] + reach + 1, h)
+    c0, c1 = max(rc[1] - reach, 0), min(rc[1] + reach + 1, w)
+    cells = np.argwhere(~state.costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
+    if len(cells) == 0:
+        return None
+    xy = grid.center_of(cells)
+    keep = np.ones(len(xy), dtype=bool)
+    for pts in (rest, np.delete(mates, i, axis=0)):
+        for chunk in np.array_split(pts, max(len(pts) // 64, 1)):
+            d = np.hypot(xy[:, None, 0] - chunk[None, :, 0], xy[:, None, 1] - chunk[None, :, 1])
+            keep &= d.min(axis=1) > gap + params.goal_tolerance_m + 0.1
+    xy = xy[keep]
+    if len(xy) == 0:
+        return None
+    order = np.argsort(np.hypot(xy[:, 0] - pose[i, 0], xy[:, 1] - pose[i, 1]))
+    costmap = _with_teammates(state, params, mates[j : j + 1])
+    # the nearest first, then farther ones (the nearest may lie behind a wall)
+    tries = dict.fromkeys([0, 1, *(int(f * (len(order) - 1)) for f in (0.05, 0.15, 0.3, 0.6))])
+    for k in tries:
+        spot = xy[order[k]]
+        status, _ = _plan(costmap, pose[i, :2], spot, params)
+        if status == "moving":
+            return np.asarray(spot)
+    return None
 
 
 def navigation_step(
@@ -112,15 +182,17 @@ def navigation_step(
     replans = state.replans.copy()
     desired = pose.copy()
     index = np.zeros(n, dtype=np.int64)
+    target = state.target_m.copy()
+    aside = state.aside_of.copy()
 
     def replan(i: int, with_mates: bool) -> None:
         costmap = state.costmap
         if with_mates:
             others = np.delete(mates, i, axis=0)
             costmap = _with_teammates(state, params, others)
-        st, path = _plan(costmap, pose[i, :2], state.goals_m[i], params)
+        st, path = _plan(costmap, pose[i, :2], target[i], params)
         if path is None and with_mates:
-            st, path = _plan(state.costmap, pose[i, :2], state.goals_m[i], params)
+            st, path = _plan(state.costmap, pose[i, :2], target[i], params)
         status[i] = st if path is None else "moving"
         paths[i] = path
         samples[i] = _samples(path)
@@ -132,9 +204,18 @@ def navigation_step(
     for i in range(n):
         if status[i] == "arrived":
             continue
-        if math.hypot(*(pose[i, :2] - state.goals_m[i])) <= params.goal_tolerance_m:
+        # half the tolerance: the estimate the decision uses may be off by a few cm
+        if math.hypot(*(pose[i, :2] - state.goals_m[i])) <= 0.5 * params.goal_tolerance_m:
             status[i] = "arrived"
             continue
+        if aside[i] >= 0 and (
+            math.hypot(*(pose[i, :2] - target[i])) <= params.goal_tolerance_m
+            or status[aside[i]] not in ("moving", "waiting")
+        ):
+            # out of the way (or the teammate is done): head for the goal again
+            aside[i] = -1
+            target[i] = state.goals_m[i]
+            replan(i, with_mates=False)
         if paths[i] is None:
             if t - since[i] >= params.stuck_time_s:  # try again now and then
                 replan(i, with_mates=False)
@@ -153,6 +234,9 @@ def navigation_step(
         elif status[i] == "moving" and t - since[i] >= params.stuck_time_s:
             if progress[i] - best[i] < params.stuck_progress_m:
                 stuck[i] += 1
+                if aside[i] >= 0:  # cannot get out of the way there: plan anew
+                    aside[i] = -1
+                    target[i] = state.goals_m[i]
                 replan(i, with_mates=True)
             else:
                 stuck[i] = 0
@@ -179,6 +263,8 @@ def navigation_step(
     gap = 2.0 * params.robot_radius_m + params.margin_m
     ahead = round(params.yield_distance_m / _SAMPLE_M)
     for i in map(int, np.nonzero(active)[0]):
+        if aside[i] >= 0:
+            continue  # already on its way out of a teammate's way: it does not stop
         mine = samples[i][index[i] : index[i] + ahead, :2]
         for j in range(i):
             if not active[j] or len(mine) == 0:
@@ -187,6 +273,16 @@ def navigation_step(
                 continue
             theirs = np.vstack([pose[j : j + 1, :2], samples[j][index[j] : index[j] + ahead, :2]])
             meets, in_way = _conflict(mine, theirs, pose[i, :2], gap)
+            if meets and in_way and aside[i] < 0:
+                rest = np.vstack([pose[j : j + 1, :2], samples[j][index[j] :: 2, :2]])
+                spot = _aside_spot(state, params, pose, mates, i, j, rest, gap)
+                if spot is not None:
+                    aside[i] = j
+                    target[i] = spot
+                    replan(i, with_mates=True)
+                    index[i] = 0
+                    v_ref[i] = 0.0
+                    break
             if meets and not in_way:
                 status[i] = "waiting"
                 v_ref[i] = 0.0
@@ -199,9 +295,15 @@ def navigation_step(
     points = _range_points(inputs, pose, reach)
     mate_pts = np.broadcast_to(mates[None], (n, n, 2)).copy()
     mate_pts[np.arange(n), np.arange(n)] = _FAR
-    obstacles = np.concatenate([points, mate_pts], axis=1)
+    walls, wall_radius = _near_walls(state, pose, reach)
+    obstacles = np.concatenate([points, walls, mate_pts], axis=1)
     radii = np.concatenate(
-        [np.zeros(points.shape[:2]), np.full((n, n), params.robot_radius_m)], axis=1
+        [
+            np.zeros(points.shape[:2]),
+            np.full(walls.shape[:2], wall_radius),
+            np.full((n, n), params.robot_radius_m),
+        ],
+        axis=1,
     )
     v, w, _ = dwa_command(
         pose, state.command, np.stack([v_ref, w_ref], axis=1), obstacles, radii, params.dwa, dt_s
@@ -228,5 +330,7 @@ def navigation_step(
         stuck_count=stuck,
         replans=replans,
         t_s=t,
+        target_m=target,
+        aside_of=aside,
     )
     return new, v, w

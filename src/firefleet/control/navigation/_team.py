@@ -11,16 +11,20 @@ Per robot, each control period::
                path's heading there: (v_ref, omega_ref)
     give way   a robot yields (v_ref = 0, it may still turn) to any teammate of higher
                priority (lower index) whose next ``yield_distance_m`` of path comes
-               within two radii + margin of its own next stretch, unless it already
-               stands in that teammate's way (then it clears out by going on)
+               within two radii + margin of its own next stretch; if it already stands
+               in that teammate's way (a narrow passage, head on), it makes way: it
+               drives to the nearest reachable spot at least two radii + margin from
+               the teammate's whole remaining path, then plans to its goal again
     safety     DWA (``_dwa``) picks the admissible command of the dynamic window
                (Table 2 motors at 12 V) nearest (v_ref, omega_ref), with a clearance
-               bonus, against the sensed range points and the teammates' discs
+               bonus, against the sensed range points, the known map's wall cells
+               (discs of half a cell's diagonal) and the teammates' discs
     re-plan    when the robot strays more than ``replan_offset_m`` from its path, or
                makes less than ``stuck_progress_m`` of progress in ``stuck_time_s``
                while not yielding: A* again from where it is, the second time in a row
                with the teammates' discs on the map
-    arrive     within ``goal_tolerance_m`` of its goal a robot stops for good
+    arrive     within half ``goal_tolerance_m`` of its goal (by its pose estimate, which
+               may be off by a few centimetres) a robot stops for good
 
 The fuzzy controller steers and DWA only bends or slows its command near obstacles:
 in the open the robot drives as the deliverable's controller drives it. The stuck
@@ -76,7 +80,8 @@ class NavigationParams:
     margin_m : float
         Extra distance kept from walls by the planner, and between robots [m].
     goal_tolerance_m : float
-        A robot this near its goal has arrived and stops [m].
+        The tolerance the task judges arrival with [m]; a robot stops for good within
+        half of it (by its estimate).
     lookahead_m : float
         How far ahead on its path a robot's desired point is [m] (the fuzzy
         controller's speed grows with it, about ``lookahead / 2`` m/s).
@@ -101,8 +106,8 @@ class NavigationParams:
     goal_tolerance_m: float = 0.2
     lookahead_m: float = 0.6
     corner_radius_m: float = 0.5
-    wall_weight: float = 4.0
-    wall_decay_m: float = 0.25
+    wall_weight: float = 2.0
+    wall_decay_m: float = 0.1
     dwa: DwaParams = field(default_factory=DwaParams)
     stuck_time_s: float = 3.0
     stuck_progress_m: float = 0.1
@@ -183,6 +188,14 @@ class NavigationState:
         Re-plans in a row for lack of progress.
     replans : ndarray of int, shape (N,)
         Paths planned so far per robot (the first included).
+    wall_points_m : ndarray, shape (K, 2)
+        Centres of the map's non-free cells that touch a free one [m]: the known walls
+        DWA keeps clear of besides what the sensors see.
+    target_m : ndarray, shape (N, 2)
+        Where each robot's current path leads [m]: its goal, or a spot out of a
+        teammate's way.
+    aside_of : ndarray of int, shape (N,)
+        The teammate a robot is making way for (-1: none).
     t_s : float
         Time of the last step [s].
     """
@@ -199,6 +212,9 @@ class NavigationState:
     stuck_count: IntArray
     replans: IntArray
     t_s: float
+    wall_points_m: FloatArray
+    target_m: FloatArray
+    aside_of: IntArray
 
     @property
     def arrived(self) -> FloatArray:
@@ -254,6 +270,14 @@ def _with_teammates(
     return build_costmap(
         teamed, params.inflation_m, wall_weight=params.wall_weight, wall_decay_m=params.wall_decay_m
     )
+
+
+def _wall_points(grid: OccupancyGrid) -> FloatArray:
+    """Centres of the non-free cells with a free 4-neighbour, (K, 2) [m]."""
+    free = np.asarray(grid.free)
+    padded = np.pad(free, 1, constant_values=False)
+    touches = padded[:-2, 1:-1] | padded[2:, 1:-1] | padded[1:-1, :-2] | padded[1:-1, 2:]
+    return np.asarray(grid.center_of(np.argwhere(~free & touches)))
 
 
 def navigation_init(
@@ -315,4 +339,7 @@ def navigation_init(
         stuck_count=np.zeros(n, dtype=np.int64),
         replans=np.ones(n, dtype=np.int64),
         t_s=0.0,
+        wall_points_m=_wall_points(grid),
+        target_m=g.copy(),
+        aside_of=np.full(n, -1, dtype=np.int64),
     )

@@ -24,6 +24,7 @@ def _path_following_robot(
     i: int,
     k0: int,
     k1: int,
+    zmin: float,
     n_steps: int,
     dt: float,
     points: FloatArray,
@@ -39,6 +40,11 @@ def _path_following_robot(
     load: FloatArray,
     cpr: float,
     done: FloatArray,
+    faults: FloatArray,
+    lead: int,
+    j_state: IntArray,
+    zeta_out: FloatArray,
+    rate_out: FloatArray,
     m_kind: IntArray,
     m_par: FloatArray,
     m_in: IntArray,
@@ -108,12 +114,24 @@ def _path_following_robot(
     cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
     int_l, der_l, last_l, cnt_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6], wheel[i, 1, 7]
     stopped = done[i] > 0.0
+    j_prev = j_state[i, 0]
+    held = j_state[i, 1]
+    n_faults = faults.shape[0]
     j_trig = -1  # the index whose heading's cos and sin are held
     cos_d, sin_d = 1.0, 0.0
     for k in range(k0, k1):
         t = k * dt
-        j = math.floor(t / period + 1e-9) + 1
+        # the robot's release clock: the wall clock less the ticks it has held
+        j = math.floor((k - held) * dt / period + 1e-9) + 1
+        if zmin == zmin and not stopped and j > j_prev and j > math.floor(zmin) + lead:
+            held += 1  # closed loop: the next point would run too far ahead, hold it
+            j = j_prev
+        j_prev = j
         tau = tau_on if t >= t_load else 0.0
+        scale = 1.0
+        for f in range(n_faults):
+            if faults[f, 0] == i and faults[f, 1] - 1e-9 <= t < faults[f, 2] - 1e-9:
+                scale *= faults[f, 3]
         row = rec_index[k]
         # --- high level: the fuzzy controller on the odometry pose (eqs. 9-11)
         if j <= pieces:
@@ -179,11 +197,16 @@ def _path_following_robot(
         omega = 0.0 if stopped else math.radians(y_main[1])
         ref_r = (v + 0.5 * axle * omega) / r
         ref_l = (v - 0.5 * axle * omega) / r
-        # --- low level: the wheel-speed PIDs
+        zeta_out[i] = j - x_err / spacing[i]  # the progress broadcast [segments]
+        rate_out[i] = v / spacing[i]  # and its rate [segments/s]
+        # --- low level: the wheel-speed PIDs (a motor fault scales what reaches the motor)
         int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref_r, meas_r, gains, dt)
         last_r = meas_r
         int_l, der_l, volt_l = pid_step_one(int_l, der_l, last_l, ref_l, meas_l, gains, dt)
         last_l = meas_l
+        if scale != 1.0:
+            volt_r *= scale
+            volt_l *= scale
         if row >= 0:
             pose_rec[row, i, 0] = px
             pose_rec[row, i, 1] = py
@@ -240,6 +263,8 @@ def _path_following_robot(
     wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6], wheel[i, 0, 7] = int_r, der_r, last_r, cnt_r
     wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
     wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6], wheel[i, 1, 7] = int_l, der_l, last_l, cnt_l
+    j_state[i, 0] = j_prev
+    j_state[i, 1] = held
     if stopped:
         done[i] = 1.0
 
@@ -268,6 +293,11 @@ def path_following_chunk(
     load: FloatArray,
     cpr: float,
     done: FloatArray,
+    faults: FloatArray,
+    lead: int,
+    j_state: IntArray,
+    zeta_out: FloatArray,
+    rate_out: FloatArray,
     m_kind: IntArray,
     m_par: FloatArray,
     m_in: IntArray,
@@ -351,6 +381,7 @@ def path_following_chunk(
             i,
             k0,
             k1,
+            math.nan,
             n_steps,
             dt,
             points,
@@ -366,6 +397,11 @@ def path_following_chunk(
             load,
             cpr,
             done,
+            faults,
+            lead,
+            j_state,
+            zeta_out,
+            rate_out,
             m_kind,
             m_par,
             m_in,
@@ -399,6 +435,135 @@ def path_following_chunk(
         )
 
 
+@numba.njit(cache=True)
+def path_following_chunk_coupled(
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    points: FloatArray,
+    spacing: FloatArray,
+    period: float,
+    pose: FloatArray,
+    odom: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    load: FloatArray,
+    cpr: float,
+    done: FloatArray,
+    faults: FloatArray,
+    lead: int,
+    j_state: IntArray,
+    zeta_out: FloatArray,
+    rate_out: FloatArray,
+    m_kind: IntArray,
+    m_par: FloatArray,
+    m_in: IntArray,
+    m_range: FloatArray,
+    m_rmf: IntArray,
+    m_rnot: NDArray[np.bool_],
+    m_rw: FloatArray,
+    m_ror: NDArray[np.bool_],
+    m_rout: IntArray,
+    m_coef: FloatArray,
+    m_mid: FloatArray,
+    m_flags: IntArray,
+    l_kind: IntArray,
+    l_par: FloatArray,
+    l_in: IntArray,
+    l_range: FloatArray,
+    l_rmf: IntArray,
+    l_rnot: NDArray[np.bool_],
+    l_rw: FloatArray,
+    l_ror: NDArray[np.bool_],
+    l_rout: IntArray,
+    l_coef: FloatArray,
+    l_mid: FloatArray,
+    l_flags: IntArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    odom_rec: FloatArray,
+    wheel_rec: FloatArray,
+    ctl_rec: FloatArray,
+    desired_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`path_following_chunk` with closed-loop coordination over an ideal link.
+
+    Tick by tick, every robot hears every robot's progress broadcast the tick before
+    (``zeta_out`` [segments] and ``rate_out`` [segments/s], predicted one tick on) and
+    its desired point runs at most ``lead`` segments ahead of the slowest
+    (``firefleet.sim.kinds.path_following``); before the first broadcast (k = 0) the
+    clock alone releases the points.
+    """
+    n = pose.shape[0]
+    for k in range(k0, k1):
+        zmin = math.nan
+        if k > 0:
+            zmin = zeta_out[0] + rate_out[0] * dt
+            for m in range(1, n):
+                zmin = min(zmin, zeta_out[m] + rate_out[m] * dt)
+        for i in range(n):
+            _path_following_robot(
+                i,
+                k,
+                k + 1,
+                zmin,
+                n_steps,
+                dt,
+                points,
+                spacing,
+                period,
+                pose,
+                odom,
+                wheel,
+                history,
+                motor,
+                pid,
+                geom,
+                load,
+                cpr,
+                done,
+                faults,
+                lead,
+                j_state,
+                zeta_out,
+                rate_out,
+                m_kind,
+                m_par,
+                m_in,
+                m_range,
+                m_rmf,
+                m_rnot,
+                m_rw,
+                m_ror,
+                m_rout,
+                m_coef,
+                m_mid,
+                m_flags,
+                l_kind,
+                l_par,
+                l_in,
+                l_range,
+                l_rmf,
+                l_rnot,
+                l_rw,
+                l_ror,
+                l_rout,
+                l_coef,
+                l_mid,
+                l_flags,
+                rec_index,
+                pose_rec,
+                odom_rec,
+                wheel_rec,
+                ctl_rec,
+                desired_rec,
+            )
+
+
 @numba.njit(cache=True, parallel=True)
 def path_following_chunk_parallel(
     k0: int,
@@ -418,6 +583,11 @@ def path_following_chunk_parallel(
     load: FloatArray,
     cpr: float,
     done: FloatArray,
+    faults: FloatArray,
+    lead: int,
+    j_state: IntArray,
+    zeta_out: FloatArray,
+    rate_out: FloatArray,
     m_kind: IntArray,
     m_par: FloatArray,
     m_in: IntArray,
@@ -456,6 +626,7 @@ def path_following_chunk_parallel(
             i,
             k0,
             k1,
+            math.nan,
             n_steps,
             dt,
             points,
@@ -471,6 +642,11 @@ def path_following_chunk_parallel(
             load,
             cpr,
             done,
+            faults,
+            lead,
+            j_state,
+            zeta_out,
+            rate_out,
             m_kind,
             m_par,
             m_in,
@@ -502,3 +678,126 @@ def path_following_chunk_parallel(
             ctl_rec,
             desired_rec,
         )
+
+
+@numba.njit(cache=True, parallel=True)
+def path_following_chunk_coupled_parallel(
+    k0: int,
+    k1: int,
+    n_steps: int,
+    dt: float,
+    points: FloatArray,
+    spacing: FloatArray,
+    period: float,
+    pose: FloatArray,
+    odom: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    geom: FloatArray,
+    load: FloatArray,
+    cpr: float,
+    done: FloatArray,
+    faults: FloatArray,
+    lead: int,
+    j_state: IntArray,
+    zeta_out: FloatArray,
+    rate_out: FloatArray,
+    m_kind: IntArray,
+    m_par: FloatArray,
+    m_in: IntArray,
+    m_range: FloatArray,
+    m_rmf: IntArray,
+    m_rnot: NDArray[np.bool_],
+    m_rw: FloatArray,
+    m_ror: NDArray[np.bool_],
+    m_rout: IntArray,
+    m_coef: FloatArray,
+    m_mid: FloatArray,
+    m_flags: IntArray,
+    l_kind: IntArray,
+    l_par: FloatArray,
+    l_in: IntArray,
+    l_range: FloatArray,
+    l_rmf: IntArray,
+    l_rnot: NDArray[np.bool_],
+    l_rw: FloatArray,
+    l_ror: NDArray[np.bool_],
+    l_rout: IntArray,
+    l_coef: FloatArray,
+    l_mid: FloatArray,
+    l_flags: IntArray,
+    rec_index: IntArray,
+    pose_rec: FloatArray,
+    odom_rec: FloatArray,
+    wheel_rec: FloatArray,
+    ctl_rec: FloatArray,
+    desired_rec: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`path_following_chunk_coupled` with each tick's robots spread over every
+    core (the same result bit for bit: the slowest progress is taken before the tick)."""
+    n = pose.shape[0]
+    for k in range(k0, k1):
+        zmin = math.nan
+        if k > 0:
+            zmin = zeta_out[0] + rate_out[0] * dt
+            for m in range(1, n):
+                zmin = min(zmin, zeta_out[m] + rate_out[m] * dt)
+        for i in numba.prange(n):
+            _path_following_robot(
+                i,
+                k,
+                k + 1,
+                zmin,
+                n_steps,
+                dt,
+                points,
+                spacing,
+                period,
+                pose,
+                odom,
+                wheel,
+                history,
+                motor,
+                pid,
+                geom,
+                load,
+                cpr,
+                done,
+                faults,
+                lead,
+                j_state,
+                zeta_out,
+                rate_out,
+                m_kind,
+                m_par,
+                m_in,
+                m_range,
+                m_rmf,
+                m_rnot,
+                m_rw,
+                m_ror,
+                m_rout,
+                m_coef,
+                m_mid,
+                m_flags,
+                l_kind,
+                l_par,
+                l_in,
+                l_range,
+                l_rmf,
+                l_rnot,
+                l_rw,
+                l_ror,
+                l_rout,
+                l_coef,
+                l_mid,
+                l_flags,
+                rec_index,
+                pose_rec,
+                odom_rec,
+                wheel_rec,
+                ctl_rec,
+                desired_rec,
+            )

@@ -21,8 +21,12 @@ METRIC_NAMES = (
     "collisions",
     "min_clearance_m",
     "position_rms_m",
+    "localisation_time_s",
     "map_agreement_pct",
 )
+
+LOCALISED_M = 0.3
+"""``localisation_time_s`` counts from when the estimate's error stays below this [m]."""
 
 
 def _obstacle_cells(grid: OccupancyGrid) -> tuple[FloatArray, float]:
@@ -116,8 +120,15 @@ def navigate_metrics(result: SimResult) -> Metrics:
     if est is not None and t_steps:
         err = np.hypot(*(est[:, :, :2] - xy).transpose(2, 0, 1))
         out["position_rms_m"] = [float(v) for v in np.sqrt(np.mean(err**2, axis=0))]
+        settle = []
+        for i in range(n):
+            off = np.nonzero(~(err[:, i] < LOCALISED_M))[0]
+            k = 0 if off.size == 0 else int(off[-1]) + 1
+            settle.append(float(result.t[k]) if k < t_steps else math.nan)
+        out["localisation_time_s"] = settle
     else:
         out["position_rms_m"] = [math.nan] * n
+        out["localisation_time_s"] = [math.nan] * n
     occupancy = result.extra.get("occupancy")
     out["map_agreement_pct"] = (
         _agreement(grid, np.asarray(occupancy)) if occupancy is not None else math.nan

@@ -23,6 +23,7 @@ metrics (``goal_reached`` 0), never waited for.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,8 +44,8 @@ from firefleet.sim.loop import (
     OdometryState,
     Sensors,
     Stages,
-    StaticWorld,
     WheelCommand,
+    default_stages,
 )
 from firefleet.sim.registry import TaskKind
 from firefleet.sim.result import SimResult
@@ -59,6 +60,7 @@ __all__ = [
     "navigate_stages",
     "reading_bearings",
     "reading_limits",
+    "wander",
 ]
 
 RANGE_READINGS = ("ultrasonic_range_m", "lidar_range_m", "stereo_scan_m")
@@ -81,12 +83,30 @@ def _grid(scenario: Scenario) -> OccupancyGrid:
 # --- stages ------------------------------------------------------------------------------
 
 
+LOCALISED_SPREAD_M = 0.5
+"""A robot counts as localised once its particle cloud's position spread (the RMS
+distance of the particles from their mean) falls below this [m]; until then the kind
+does not trust the estimate to plan with."""
+
+
 @dataclass(frozen=True)
 class TrackedState:
-    """The odometry and the localisation filter's state, side by side."""
+    """The odometry, the localisation filter's state, and which robots are localised."""
 
     odometry: OdometryState
     inner: Any
+    localised: np.ndarray[Any, np.dtype[np.bool_]]
+
+
+def _localised(inner: Any, state: Any, n: int) -> np.ndarray[Any, np.dtype[np.bool_]]:
+    """Whether each robot's particle cloud is tight (always, without particles)."""
+    if inner is None or not hasattr(inner, "particles"):
+        return np.ones(n, dtype=bool)
+    cloud = np.asarray(inner.particles(state))[..., :2]  # (N, P, 2), NaN-padded
+    mean = np.nanmean(cloud, axis=1, keepdims=True)
+    spread = np.sqrt(np.nanmean(np.sum((cloud - mean) ** 2, axis=-1), axis=1))
+    out: np.ndarray[Any, np.dtype[np.bool_]] = spread < LOCALISED_SPREAD_M
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,7 +129,8 @@ class Tracked:
     def init(self, pose: FloatArray, drive: DriveState) -> TrackedState:
         """Odometry and filter at the start."""
         inner = self.inner.init(pose, drive) if self.inner is not None else None
-        return TrackedState(Odometry().init(pose, drive), inner)
+        n = pose.shape[0]
+        return TrackedState(Odometry().init(pose, drive), inner, _localised(self.inner, inner, n))
 
     def step(
         self,
@@ -121,20 +142,31 @@ class Tracked:
         """Both moved by the counts since the last tick (the filter also by the scans)."""
         odometry = Odometry().step(state.odometry, drive, stack, readings)
         inner = state.inner
+        localised = state.localised
         if self.inner is not None:
             inner = self.inner.step(inner, drive, stack, readings)
-        return TrackedState(odometry, inner)
+            if inner is not state.inner:
+                localised = _localised(self.inner, inner, localised.size)
+        return TrackedState(odometry, inner, localised)
 
-    def pose(self, state: TrackedState) -> FloatArray:
-        """The filter's estimate, or the odometry (N, 3)."""
+    def _estimate(self, state: TrackedState) -> FloatArray:
         if self.inner is None:
             return state.odometry.pose
         pose: FloatArray = self.inner.pose(state.inner)
         return pose
 
+    def pose(self, state: TrackedState) -> FloatArray:
+        """The filter's estimate, or the odometry (N, 3); NaN for a robot not localised
+        yet (its particle cloud wider than :data:`LOCALISED_SPREAD_M`)."""
+        return np.where(state.localised[:, None], self._estimate(state), np.nan)
+
     def series(self, state: TrackedState) -> Messages:
-        """``odometry_pose`` and ``estimated_pose``, (N, 3) each."""
-        return {"odometry_pose": state.odometry.pose, "estimated_pose": self.pose(state)}
+        """``odometry_pose`` and ``estimated_pose`` (N, 3) each, and ``localised`` (N,)."""
+        return {
+            "odometry_pose": state.odometry.pose,
+            "estimated_pose": self._estimate(state),
+            "localised": state.localised.astype(float),
+        }
 
     def final(self, state: TrackedState) -> Messages:
         """The team's map (``occupancy``, probability (H, W)) where the filter maps."""
@@ -143,35 +175,41 @@ class Tracked:
         return {"occupancy": np.asarray(self.inner.occupancy(state.inner), dtype=np.float32)}
 
 
+def _sensor_params(scenario: Scenario) -> dict[str, Any]:
+    """The range sensors of ``sensors:`` as ``firefleet.sim.ranging`` parameters, by the
+    name of their reading."""
+    spec = scenario.sensors
+    if spec is None:
+        return {}
+    from firefleet.sim.ranging import LidarParams, UltrasonicParams
+
+    out: dict[str, Any] = {}
+    if spec.ultrasonic is not None:
+        u = spec.ultrasonic
+        out["ultrasonic_range_m"] = UltrasonicParams(
+            count=u.count, fov_deg=u.fov_deg, max_range_m=u.max_range_m, noise_m=u.noise_m
+        )
+    if spec.lidar is not None:
+        li = spec.lidar
+        out["lidar_range_m"] = LidarParams(
+            beams=li.beams, fov_deg=li.fov_deg, max_range_m=li.max_range_m, noise_m=li.noise_m
+        )
+    return out
+
+
 def _sensors(scenario: Scenario, grid: OccupancyGrid, rng: np.random.Generator) -> Sensors:
     """The range sensors of ``sensors:`` (none without the key)."""
-    spec = scenario.sensors
-    if spec is None or (spec.ultrasonic is None and spec.lidar is None):
+    params = _sensor_params(scenario)
+    if not params:
         return NoSensors()
-    from firefleet.sim.ranging import LidarParams, RangeSensors, UltrasonicParams
+    from firefleet.sim.ranging import RangeSensors
 
-    radius = _command(scenario).robot_radius_m
-    ultra = spec.ultrasonic
-    lidar = spec.lidar
-    return RangeSensors(  # type: ignore[no-any-return]
+    return RangeSensors(
         grid,
-        radius,
-        ultrasonic=None
-        if ultra is None
-        else UltrasonicParams(
-            count=ultra.count,
-            fov_deg=ultra.fov_deg,
-            max_range_m=ultra.max_range_m,
-            noise_m=ultra.noise_m,
-        ),
-        lidar=None
-        if lidar is None
-        else LidarParams(
-            beams=lidar.beams,
-            fov_deg=lidar.fov_deg,
-            max_range_m=lidar.max_range_m,
-            noise_m=lidar.noise_m,
-        ),
+        _command(scenario).robot_radius_m,
+        ultrasonic=params.get("ultrasonic_range_m"),
+        lidar=params.get("lidar_range_m"),
+        dt_s=scenario.dt_s,
         rng=rng,
     )
 
@@ -194,8 +232,9 @@ def _localisation(scenario: Scenario, grid: OccupancyGrid, rng: np.random.Genera
 
 
 def navigate_stages(scenario: Scenario, decider: Decider, rng: np.random.Generator) -> Stages:
-    """The navigate kind's stages: the map, the range sensors, an ideal link, and the
-    localisation of ``command.localisation`` beside the odometry (:class:`Tracked`).
+    """The navigate kind's stages: the default world and link (:func:`default_stages`:
+    the load step, motor faults, the scenario's link), the range sensors on the map, and
+    the localisation of ``command.localisation`` beside the odometry (:class:`Tracked`).
 
     Examples
     --------
@@ -209,8 +248,8 @@ def navigate_stages(scenario: Scenario, decider: Decider, rng: np.random.Generat
     'Tracked'
     """
     grid = _grid(scenario)
-    return Stages(
-        world=StaticWorld(torque_n_m=scenario.load.torque_n_m, start_s=scenario.load.start_s),
+    return dataclasses.replace(
+        default_stages(scenario, decider),  # the world's load and faults, the link
         sensors=_sensors(scenario, grid, rng),
         estimation=Tracked(_localisation(scenario, grid, rng)),
     )
@@ -239,7 +278,10 @@ class NavigateParams:
     navigation: Any
     geometry: RobotGeometry
     bearings_rad: dict[str, FloatArray]
+    grid: OccupancyGrid
+    goals_m: FloatArray
     period_s: float = 0.1
+    wander_speed_m_s: float = 0.2
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,6 +292,7 @@ class NavigateState:
     v_m_s: FloatArray
     omega_rad_s: FloatArray
     next_s: float
+    planned: bool = True
 
 
 _UNDER_WAY = ("moving", "waiting")
@@ -257,22 +300,14 @@ _UNDER_WAY = ("moving", "waiting")
 
 
 def _scanners(scenario: Scenario) -> dict[str, Any]:
-    """The beams of each range reading (``firefleet.estimation.grid.Scanner``): the
-    lidar's ``beams`` over ``fov_deg`` centred ahead, the ultrasonic ring's ``count``
-    evenly round the robot."""
-    spec = scenario.sensors
-    if spec is None:
+    """The beams of each range reading as the filters take them
+    (``firefleet.estimation.grid.Scanner``), the sensors' own bearings."""
+    params = _sensor_params(scenario)
+    if not params:
         return {}
     from firefleet.estimation.grid import Scanner
 
-    out: dict[str, Any] = {}
-    if spec.ultrasonic is not None:
-        u = spec.ultrasonic
-        out["ultrasonic_range_m"] = Scanner.ring(u.count, 360.0, u.max_range_m)
-    if spec.lidar is not None:
-        li = spec.lidar
-        out["lidar_range_m"] = Scanner.ring(li.beams, li.fov_deg, li.max_range_m)
-    return out
+    return {name: Scanner(p.bearings_rad, p.max_range_m) for name, p in params.items()}
 
 
 def reading_bearings(scenario: Scenario) -> dict[str, FloatArray]:
@@ -300,9 +335,49 @@ def _init(scenario: Scenario) -> tuple[Any, NavigateParams]:
     nav = NavigationParams(robot_radius_m=cmd.robot_radius_m, goal_tolerance_m=cmd.goal_tolerance_m)
     state = navigation_init(_grid(scenario), scenario.initial_poses, np.array(cmd.goals_m), nav)
     zero = np.zeros(scenario.n_robots)
-    return NavigateState(state, zero, zero, 0.0), NavigateParams(
-        nav, scenario.robot, reading_bearings(scenario)
-    )
+    grid = _grid(scenario)
+    goals = np.array(cmd.goals_m, dtype=float)
+    params = NavigateParams(nav, scenario.robot, reading_bearings(scenario), grid, goals)
+    return NavigateState(state, zero, zero, 0.0, planned=cmd.localisation != "mcl"), params
+
+
+def wander(
+    ranges_m: FloatArray, bearings_rad: FloatArray, speed_m_s: float
+) -> tuple[FloatArray, FloatArray]:
+    """A robot that does not know where it is yet explores: it turns toward its most
+    open bearing and drives at ``speed_m_s`` scaled down by the free distance ahead
+    (stopping 0.5 m from an obstacle in its forward sector of +-45 degrees).
+
+    Parameters
+    ----------
+    ranges_m : ndarray, shape (N, B)
+        Range readings [m] (``inf`` for no return).
+    bearings_rad : ndarray, shape (B,)
+        Their bearings from the heading [rad].
+    speed_m_s : float
+        Cruising speed [m/s].
+
+    Returns
+    -------
+    v_m_s, omega_rad_s : ndarray, shape (N,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.kinds.navigate import wander
+    >>> b = np.array([0.0, np.pi / 2, np.pi, -np.pi / 2])
+    >>> v, w = wander(np.array([[0.4, 3.0, 1.0, 1.0]]), b, 0.2)  # a wall ahead, open left
+    >>> float(v[0]), float(w[0]) > 0
+    (0.0, True)
+    """
+    r = np.where(np.isfinite(ranges_m), ranges_m, 10.0)
+    wrapped = np.angle(np.exp(1j * bearings_rad))
+    ahead = np.abs(wrapped) <= np.pi / 4
+    front = r[:, ahead].min(axis=1) if np.any(ahead) else np.full(r.shape[0], 10.0)
+    best = wrapped[np.argmax(r - 0.2 * np.abs(wrapped), axis=1)]
+    omega = np.clip(1.5 * best, -1.0, 1.0)
+    v = speed_m_s * np.clip((front - 0.5) / 1.0, 0.0, 1.0) * np.cos(np.clip(best, -1.5, 1.5))
+    return np.maximum(v, 0.0), omega
 
 
 def navigate_decide(
@@ -328,12 +403,31 @@ def navigate_decide(
     command : WheelCommand
         Wheel references (N, 2) [rad/s]; ``done`` once no robot is under way.
     """
-    from firefleet.control.navigation import NavigationInputs, navigation_step
+    from firefleet.control.navigation import NavigationInputs, navigation_init, navigation_step
 
     pose = inputs.pose_estimate
     if pose is None:
         raise InputError("navigate needs a pose estimate")
-    teammates = np.asarray(inputs.inbox.get("xy_m", pose[:, :2]))
+    lost = np.isnan(pose[:, 0])
+    if not state.planned:  # global localisation: explore until every robot is localised
+        if np.any(lost):
+            if inputs.t_s >= state.next_s - 1e-9:
+                name = next(iter(params.bearings_rad))
+                v, omega = wander(
+                    np.asarray(inputs.readings[name]),
+                    params.bearings_rad[name],
+                    params.wander_speed_m_s,
+                )
+                v, omega = np.where(lost, v, 0.0), np.where(lost, omega, 0.0)
+                state = NavigateState(
+                    state.navigation, v, omega, state.next_s + params.period_s, False
+                )
+            return state, _wheel_command(state, inputs, params, pose, ("waiting",) * pose.shape[0])
+        nav = navigation_init(params.grid, pose, params.goals_m, params.navigation)
+        zero = np.zeros(pose.shape[0])
+        state = NavigateState(nav, zero, zero, inputs.t_s, True)
+    heard = np.asarray(inputs.inbox.get("xy_m", pose[:, :2]))
+    teammates = np.where(np.isfinite(heard), heard, pose[:, :2])  # none heard: our own
     ranges = {
         name: (inputs.readings[name], bearings)
         for name, bearings in params.bearings_rad.items()
@@ -347,8 +441,18 @@ def navigate_decide(
             state.navigation, nav_inputs, params.navigation, params.period_s
         )
         state = NavigateState(nav, v, omega, state.next_s + params.period_s)
+    return state, _wheel_command(state, inputs, params, pose, tuple(state.navigation.status))
+
+
+def _wheel_command(
+    state: NavigateState,
+    inputs: DecideInputs,
+    params: NavigateParams,
+    pose: FloatArray,
+    status: tuple[str, ...],
+) -> WheelCommand:
+    """The held (v, omega) as wheel references, with the series to record."""
     v, omega = state.v_m_s, state.omega_rad_s
-    status = tuple(state.navigation.status)
     series: dict[str, FloatArray] = {
         "v_ref_m_s": np.asarray(v, dtype=float),
         "omega_ref_rad_s": np.asarray(omega, dtype=float),
@@ -357,14 +461,12 @@ def navigate_decide(
     for name in RANGE_READINGS:
         if name in inputs.readings:
             series[name] = np.asarray(inputs.readings[name], dtype=np.float32)
-    done = not any(s in _UNDER_WAY for s in status)
-    command = WheelCommand(
+    return WheelCommand(
         reference_rad_s=body_to_wheels(np.asarray(v), np.asarray(omega), params.geometry),
         series=series,
         outbox={"xy_m": pose[:, :2].copy()},
-        done=done,
+        done=not any(s in _UNDER_WAY for s in status),
     )
-    return state, command
 
 
 _STATUS_CODE = {

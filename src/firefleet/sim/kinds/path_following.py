@@ -13,8 +13,20 @@ For each robot of the team (Figure 10), on the world loop (:mod:`firefleet.sim.l
                      -> encoders
 
 The default stages run as one compiled chunk (:mod:`firefleet.sim._kernels`), called
-from :func:`_kernel_chunk` only. Robots interact only through the common release
-schedule, so a team run equals its robots run one by one.
+from :func:`_kernel_chunk` only.
+
+Coordination (``command.coordination``): ``closed`` (the default) closes the release
+of the desired points through the team's progress as each robot hears it over the
+link (:mod:`firefleet.control.coordination`: no robot's point runs more than
+``lead_segments`` ahead of the slowest progress it has heard); ``clock`` is the
+deliverable's open-loop common schedule alone, where a team run equals its robots run
+one by one. With every robot on time the two release the same points (the built-in
+experiments give the same results bit for bit); they part when a robot falls behind
+(``coop-motor-fault``). Each robot's broadcast is the outbox's ``zeta`` [segments] and
+``zeta_rate`` [segments/s], (N,); the inbox brings them back either as (N,), heard
+alike by everyone one tick later (the ideal link), or as (N, N) rows per receiver with
+the ticks they were sent at, ``sent_tick`` (N, N) (:mod:`firefleet.sim.link`), or
+their ages ``zeta_age_s`` (N, N) [s] (:mod:`firefleet.net`'s relay).
 """
 
 from __future__ import annotations
@@ -22,6 +34,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from firefleet._typing import FloatArray
+from firefleet.control.coordination import coordinated_release, heard_minimum
 from firefleet.control.path_following import (
     PathFollowingController,
     arrival,
@@ -43,8 +57,11 @@ from firefleet.sim._kernels import (
     PARALLEL_MIN_ROBOTS,
     PARALLEL_MIN_ROBOTS_ONE_PIECE,
     path_following_chunk,
+    path_following_chunk_coupled,
+    path_following_chunk_coupled_parallel,
     path_following_chunk_parallel,
 )
+from firefleet.sim.link import ages
 from firefleet.sim.loop import DecideInputs, Decider, ProgressCallback, WheelCommand, chunk_bounds
 from firefleet.sim.registry import Metrics, TaskKind
 from firefleet.sim.result import SimResult
@@ -70,9 +87,13 @@ CONTROL_SERIES = (
 )
 """Controller quantities recorded each sample, (T, N) each, in this order."""
 
-SERIES = ("odometry_pose", "desired_xy_m", *CONTROL_SERIES)
+LINK_SERIES = ("message_age_max_s", "stale_robots")
+"""Per robot (T, N): the oldest progress value the law used [s] (NaN: none heard) and
+how many robots it held stale."""
+
+SERIES = ("odometry_pose", "desired_xy_m", *CONTROL_SERIES, *LINK_SERIES)
 """What a run records in ``extra``: the odometry (T, N, 3), the desired points (T, N, 2)
-and the controller series."""
+the controller series and the link series."""
 
 
 def _command(scenario: Scenario) -> PathFollowing:
@@ -101,55 +122,126 @@ class PathFollowingParams:
         The desired points and their release schedule.
     geometry : RobotGeometry
         Nominal geometry, for the wheel references.
+    closed : bool
+        Closed-loop coordination (else the clock alone).
+    lead_segments : int
+        The closed law's bound [segments].
+    timeout_s : float
+        Progress older than this is stale [s].
     """
 
     controller: PathFollowingController
     trajectory: Trajectory
     geometry: RobotGeometry
+    closed: bool = True
+    lead_segments: int = 10
+    timeout_s: float = 1.0
 
 
-def _init(scenario: Scenario) -> tuple[NDArray[np.bool_], PathFollowingParams]:
+@dataclass(frozen=True)
+class PathFollowingState:
+    """The team's decision memory (each (N,)): who has arrived, the indices released, and
+    how many ticks each robot's release clock has held (``firefleet.control.coordination``)."""
+
+    arrived: NDArray[np.bool_]
+    released: NDArray[np.int64]
+    held: NDArray[np.int64]
+
+
+def _init(scenario: Scenario) -> tuple[PathFollowingState, PathFollowingParams]:
     cmd = _command(scenario)
     params = PathFollowingParams(
         controller=PathFollowingController.from_command(cmd),
         trajectory=_trajectory(cmd),
         geometry=scenario.robot,
+        closed=cmd.coordination == "closed",
+        lead_segments=cmd.lead_segments,
+        timeout_s=scenario.link.timeout_s if scenario.link is not None else 1.0,
     )
-    return np.zeros(scenario.n_robots, dtype=np.bool_), params
+    n = scenario.n_robots
+    zeros = np.zeros(n, dtype=np.int64)
+    return PathFollowingState(np.zeros(n, dtype=np.bool_), zeros, zeros), params
+
+
+def _desired_at(traj: Trajectory, j: NDArray[np.int64]) -> FloatArray:
+    """Each robot's point ``j[i]`` (N, 3); past the end, the end moved on along its
+    heading (as :meth:`Trajectory.desired` does for a common index)."""
+    n = traj.pieces
+    rows = np.arange(j.size)
+    out = np.array(traj.points[rows, np.minimum(j, n)])
+    past = j > n
+    if np.any(past):
+        end = traj.points[rows[past], n]
+        beyond = (j[past] - n) * traj.end_spacing_m[past]
+        out[past, 0] = end[:, 0] + beyond * np.cos(end[:, 2])
+        out[past, 1] = end[:, 1] + beyond * np.sin(end[:, 2])
+    return out
+
+
+def _heard(
+    inbox: Mapping[str, FloatArray], n: int, step: int, dt_s: float, timeout_s: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """zmin, age_max, stale (each (N,)) from the inbox; NaN, NaN, 0 if nothing came."""
+    if "zeta" not in inbox:
+        return np.full(n, np.nan), np.full(n, np.nan), np.zeros(n)
+    zeta, rate = np.asarray(inbox["zeta"]), np.asarray(inbox["zeta_rate"])
+    if zeta.ndim == 1:  # the ideal link: everyone heard every broadcast of the last tick
+        m = zeta.size
+        zeta, rate = np.broadcast_to(zeta, (n, m)), np.broadcast_to(rate, (n, m))
+        age = np.full((n, m), dt_s)
+    else:
+        if "sent_tick" in inbox:  # the link model: the tick each value was sent at
+            age = ages(np.asarray(inbox["sent_tick"]), step, dt_s)
+        else:  # ages as such (firefleet.net's relay: +inf for a robot gone)
+            age = np.asarray(inbox["zeta_age_s"])
+    return heard_minimum(zeta, rate, age, timeout_s)
 
 
 def path_following_decide(
-    arrived: NDArray[np.bool_], inputs: DecideInputs, params: PathFollowingParams, dt_s: float
-) -> tuple[NDArray[np.bool_], WheelCommand]:
+    state: PathFollowingState, inputs: DecideInputs, params: PathFollowingParams, dt_s: float
+) -> tuple[PathFollowingState, WheelCommand]:
     """The team's decision at a tick: wheel references from the odometry poses.
 
     Parameters
     ----------
-    arrived : ndarray of bool, shape (N,)
-        Which robots have stopped at their path's end (the state).
+    state : PathFollowingState
+        Which robots have stopped at their path's end, and the indices released.
     inputs : DecideInputs
-        ``t_s`` and ``pose_estimate`` (N, 3), the odometry.
+        ``t_s``, ``pose_estimate`` (N, 3), the odometry, and the ``inbox``: the team's
+        progress as heard (module notes).
     params : PathFollowingParams
     dt_s : float
-        Control period [s] (unused: the schedule runs on ``t_s``).
+        Control period [s] (the age of what the ideal link delivers).
 
     Returns
     -------
-    arrived : ndarray of bool, shape (N,)
+    state : PathFollowingState
     command : WheelCommand
-        Wheel references [rad/s] (N, 2); the series of ``SERIES``.
+        Wheel references [rad/s] (N, 2); the series of ``SERIES``; the outbox's
+        progress broadcast ``zeta``, ``zeta_rate`` (N,).
     """
     pose = inputs.pose_estimate
     if pose is None:
         raise InputError("path following needs a pose estimate (estimation: odometry)")
     traj = params.trajectory
-    j = traj.release_index(inputs.t_s)
-    desired = traj.desired(inputs.t_s)
+    n = pose.shape[0]
+    if params.closed:
+        zmin, age_max, stale = _heard(inputs.inbox, n, inputs.step, dt_s, params.timeout_s)
+    else:
+        zmin, age_max, stale = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n)
+    # a robot that has arrived holds no point back (it has stopped for good)
+    zmin = np.where(state.arrived, np.nan, zmin)
+    j, held = coordinated_release(
+        state.released, state.held, inputs.step, dt_s, traj.period_s, zmin, params.lead_segments
+    )
+    desired = _desired_at(traj, j)
     x = controller_inputs(pose, desired)
     v, omega, lam = params.controller.command(x)
-    arrived = arrival(arrived, pose, traj.points[:, -1], j, traj.pieces)
+    past_end = arrival(np.zeros(n, dtype=np.bool_), pose, traj.points[:, -1], 0, 0)
+    arrived = state.arrived | (past_end & (j >= traj.pieces))
     v = np.where(arrived, 0.0, v)
     omega = np.where(arrived, 0.0, omega)
+    spacing = traj.end_spacing_m
     series = {
         "odometry_pose": pose,
         "desired_xy_m": desired[:, :2],
@@ -160,10 +252,15 @@ def path_following_decide(
         "y_err_m": x[:, 2],
         "alpha_rad": x[:, 3],
         "lambda_rad": lam,
-        "desired_index": np.full(pose.shape[0], float(j)),
+        "desired_index": j.astype(np.float64),
+        "message_age_max_s": age_max,
+        "stale_robots": stale,
     }
-    command = WheelCommand(reference_rad_s=body_to_wheels(v, omega, params.geometry), series=series)
-    return arrived, command
+    outbox = {"zeta": j - x[:, 1] / spacing, "zeta_rate": v / spacing}
+    command = WheelCommand(
+        reference_rad_s=body_to_wheels(v, omega, params.geometry), series=series, outbox=outbox
+    )
+    return PathFollowingState(arrived, j, held), command
 
 
 # --- the same, fused -----------------------------------------------------------------------
@@ -181,6 +278,7 @@ class _Buffers:
     wheel_rec: FloatArray
     ctl_rec: FloatArray
     desired_rec: FloatArray
+    closed: bool
 
 
 @functools.cache
@@ -215,6 +313,10 @@ def _start(scenario: Scenario, phase: FloatArray, rec_steps: NDArray[np.int64]) 
     wheel[:, :, 7] = first
     history = np.repeat(first[:, :, None], enc.window_steps + 1, axis=2)
     done = np.zeros(n)  # 1 once a robot has reached its path's end (it then stays)
+    closed = cmd.coordination == "closed"
+    faults = np.array(
+        [[f.robot - 1, f.start_s, f.end_s, f.voltage_scale] for f in scenario.faults]
+    ).reshape(-1, 4)
     n_rec = rec_steps.size
     rec_index = np.full(scenario.n_steps + 1, -1, dtype=np.int64)
     rec_index[rec_steps] = np.arange(n_rec)
@@ -241,6 +343,11 @@ def _start(scenario: Scenario, phase: FloatArray, rec_steps: NDArray[np.int64]) 
         load,
         float(cpr),
         done,
+        faults,
+        cmd.lead_segments if closed else 0,
+        np.zeros((n, 2), dtype=np.int64),  # the released indices, the ticks held
+        np.zeros(n),  # the progress broadcast [segments]
+        np.zeros(n),  # and its rate [segments/s]
         *ctl.main_tables,
         *ctl.lambda_tables,
         rec_index,
@@ -250,15 +357,26 @@ def _start(scenario: Scenario, phase: FloatArray, rec_steps: NDArray[np.int64]) 
         ctl_rec,
         desired_rec,
     )
-    return _Buffers(scenario, rec_steps, args, pose_rec, odom_rec, wheel_rec, ctl_rec, desired_rec)
+    return _Buffers(
+        scenario, rec_steps, args, pose_rec, odom_rec, wheel_rec, ctl_rec, desired_rec, closed
+    )
 
 
 def _kernel_chunk(buffers: _Buffers, k0: int, k1: int, *, one_piece: bool = False) -> None:
     """Ticks ``k0 .. k1 - 1`` of the compiled loop: the one call of the kernel.
 
     Robots run on every core from ``PARALLEL_MIN_ROBOTS`` robots (one whole run from
-    ``PARALLEL_MIN_ROBOTS_ONE_PIECE``); the result is the same bit for bit."""
+    ``PARALLEL_MIN_ROBOTS_ONE_PIECE``); the result is the same bit for bit. Closed-loop
+    coordination couples the robots: the kernel then goes tick by tick."""
     n = buffers.scenario.n_robots
+    if buffers.closed:
+        coupled = (
+            path_following_chunk_coupled_parallel
+            if n >= PARALLEL_MIN_ROBOTS
+            else path_following_chunk_coupled
+        )
+        coupled(k0, k1, *buffers.args)
+        return
     parallel = n >= (PARALLEL_MIN_ROBOTS_ONE_PIECE if one_piece else PARALLEL_MIN_ROBOTS)
     kernel = path_following_chunk_parallel if parallel else path_following_chunk
     kernel(k0, k1, *buffers.args)
@@ -300,8 +418,18 @@ def _finish(buffers: _Buffers) -> SimResult:
             "odometry_pose": buffers.odom_rec,
             "desired_xy_m": buffers.desired_rec,
             **{name: ctl_rec[:, :, i] for i, name in enumerate(CONTROL_SERIES)},
+            **_ideal_link_series(buffers),
         },
     )
+
+
+def _ideal_link_series(buffers: _Buffers) -> dict[str, FloatArray]:
+    """The link series of a fused run: over the ideal link every robot hears every
+    broadcast one tick old (none at tick 0); nothing is heard on the clock alone."""
+    shape = buffers.ctl_rec.shape[:2]
+    age = np.full(shape, buffers.scenario.dt_s if buffers.closed else np.nan)
+    age[buffers.rec_steps == 0] = np.nan
+    return {"message_age_max_s": age, "stale_robots": np.zeros(shape)}
 
 
 # --- metrics and figures -------------------------------------------------------------------
@@ -335,7 +463,8 @@ def path_following_metrics(result: SimResult) -> Metrics:
     stays within one piece of every other's: the formation of Figures 32 and 36,
     measured on the paths' average length; NaN for one robot); ``odometry_drift_m``
     (distance between dead reckoning and the true pose at the end); ``peak_current_a``;
-    ``max_voltage_v``. Times are NaN where the event never happens.
+    ``max_voltage_v``; ``messages_sent``, ``messages_lost``, ``message_age_max_s``
+    (:func:`_link_metrics`). Times are NaN where the event never happens.
     """
     cmd = _command(result.scenario)
     t = result.t
@@ -397,7 +526,25 @@ def path_following_metrics(result: SimResult) -> Metrics:
     out["odometry_drift_m"] = [float(v) for v in np.hypot(*(odom[-1, :, :2] - xy[-1]).T)]
     out["peak_current_a"] = float(np.abs(result.current_a).max())
     out["max_voltage_v"] = float(np.abs(result.voltage_v).max())
+    out.update(_link_metrics(result, cmd))
     return out
+
+
+def _link_metrics(result: SimResult, cmd: PathFollowing) -> Metrics:
+    """``messages_sent`` and ``messages_lost`` (per directed pair, the link's counters;
+    over the ideal link every robot hears every other at every tick after the first,
+    none lost; nothing on the clock alone) and ``message_age_max_s`` (the oldest value
+    the law used; NaN if none)."""
+    extra = result.extra
+    n = result.pose.shape[1]
+    if "messages_sent" in extra:
+        sent, lost = float(extra["messages_sent"][-1]), float(extra["messages_lost"][-1])
+    else:
+        steps = result.scenario.n_steps if cmd.coordination == "closed" else 0
+        sent, lost = float(n * (n - 1) * steps), 0.0
+    age = extra["message_age_max_s"]
+    age_max = float(np.nanmax(age)) if np.any(np.isfinite(age)) else math.nan
+    return {"messages_sent": sent, "messages_lost": lost, "message_age_max_s": age_max}
 
 
 def _sync_distance(progress: FloatArray, pieces: int, length_m: float) -> float:
@@ -445,6 +592,9 @@ KINDS = (
             "odometry_drift_m",
             "peak_current_a",
             "max_voltage_v",
+            "messages_sent",
+            "messages_lost",
+            "message_age_max_s",
         ),
         metrics=path_following_metrics,
         figures=_figures,
