@@ -33,6 +33,7 @@ TOPICS = (
     "fuzzy",
     "formation",
     "thermal",
+    "ranging",
     "stereo",
     "slam",
     "sweep",

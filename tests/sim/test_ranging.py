@@ -11,7 +11,13 @@ import pytest
 
 from firefleet.errors import InputError
 from firefleet.perception.stereo import range_scan
-from firefleet.sim._ranging_cast import _cast_team, cast_ray, cast_team
+from firefleet.sim._ranging_cast import (
+    _cast_team,
+    _hash_discs,
+    cast_ray,
+    cast_team,
+    clearance_cells,
+)
 from firefleet.sim.ranging import (
     LidarParams,
     RangeSensors,
@@ -170,28 +176,24 @@ def test_compiled_equals_python_and_batch_equals_one_at_a_time() -> None:
     bearings = np.linspace(-3.0, 3.0, 17)
     occ = np.ascontiguousarray(grid.occupied)
     xy = np.ascontiguousarray(poses[:, :2])
-    cand = np.array([1, 2, 3, 4], dtype=np.int64)
+    hashed = _hash_discs(xy, 0.2, 0.5)
+    for part_c, part_p in zip(hashed, _hash_discs.py_func(xy, 0.2, 0.5), strict=True):
+        np.testing.assert_array_equal(part_c, part_p)
+    clear = clearance_cells(occ)
+    x, y, th = poses[0]
     for b in bearings:
-        args = (
-            occ,
-            0.1,
-            -2.0,
-            1.0,
-            poses[0, 0],
-            poses[0, 1],
-            poses[0, 2] + b,
-            5.0,
-            xy,
-            0.2,
-            cand,
-            4,
-        )
-        assert cast_ray(*args) == cast_ray.py_func(*args)
-    r_c, c_c = cast_team(occ, 0.1, (-2.0, 1.0), poses, bearings, 5.0, 0.2)
+        for jumps in (clear, np.zeros_like(clear)):
+            args = (occ, 0.1, -2.0, 1.0, x, y, th + b, 5.0, 0, xy, 0.2, *hashed, jumps)
+            assert cast_ray(*args) == cast_ray.py_func(*args)
+    r_c, c_c = cast_team(occ, 0.1, (-2.0, 1.0), poses, bearings, 5.0, 0.2, clear)
     r_p, c_p = np.empty_like(r_c), np.empty_like(c_c)
-    _cast_team.py_func(occ, 0.1, -2.0, 1.0, poses, bearings, 5.0, 0.2, r_p, c_p)
+    _cast_team.py_func(occ, 0.1, -2.0, 1.0, poses, bearings, 5.0, 0.2, clear, r_p, c_p)
     np.testing.assert_array_equal(r_c, r_p)
     np.testing.assert_array_equal(c_c, c_p)
+    # jumping through empty space changes no range (only the last bits of the arithmetic)
+    r_walk, c_walk = cast_team(occ, 0.1, (-2.0, 1.0), poses, bearings, 5.0, 0.2)
+    np.testing.assert_allclose(r_c, r_walk, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(c_c, c_walk, rtol=0, atol=1e-12)
     assert np.isfinite(r_c).any()
     assert np.isinf(r_c).any()
     # without discs, the batch is each robot alone, for every sensor
@@ -365,3 +367,36 @@ def test_bad_poses_and_radius() -> None:
         lidar_scan(grid, [[1.0, 2.0]], LidarParams(), robot_radius_m=0.2, rng=rng)
     with pytest.raises(InputError, match="robot_radius_m"):
         lidar_scan(grid, [[1.0, 2.0, 0.0]], LidarParams(), robot_radius_m=-0.2, rng=rng)
+
+
+def disc_reference(xy: np.ndarray, me: int, angle: float, radius: float) -> float:
+    """Nearest hit of a ray from robot ``me`` on every other robot's disc (NumPy roots)."""
+    d = np.array([math.cos(angle), math.sin(angle)])
+    f = xy[me] - np.delete(xy, me, axis=0)
+    b = f @ d
+    c = np.sum(f * f, axis=1) - radius**2
+    disc = b * b - c
+    ok = (disc >= 0) & (b <= 0)
+    s = -b[ok] - np.sqrt(disc[ok])
+    inside = c <= 0
+    return 0.0 if inside.any() else (float(s.min()) if s.size else math.inf)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_crowd_blocks_beams_as_discs(seed: int) -> None:
+    """40 robots on a random map: every beam is the nearer of the exact wall hit and the
+    nearest other robot's disc (discs sorted into bearing bins must lose none)."""
+    grid = random_grid(seed)
+    rng = np.random.default_rng(seed)
+    poses = np.array([free_pose(grid, rng) for _ in range(40)])
+    params = LidarParams(beams=45, max_range_m=4.0, noise_m=0.0)
+    out = lidar_scan(grid, poses, params, robot_radius_m=0.25, rng=rng)
+    blocked_by_robot = 0
+    for a, (x, y, th) in enumerate(poses):
+        for b, r in zip(params.bearings_rad, out[a], strict=True):
+            wall = slab_reference(grid, x, y, th + b)
+            robot = disc_reference(poses[:, :2], a, th + b, 0.25)
+            blocked_by_robot += robot < wall
+            expect = min(wall, robot)
+            assert r == pytest.approx(expect if expect <= 4.0 else math.inf, abs=1e-9)
+    assert blocked_by_robot > 20  # the crowd matters in this test

@@ -28,7 +28,28 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 
-__all__ = ["cast_ray", "cast_team"]
+__all__ = ["cast_ray", "cast_team", "clearance_cells"]
+
+_MIN_JUMP = 2.0
+"""Shortest jump through empty space worth taking [cells] (shorter: walk cell by cell)."""
+
+
+def clearance_cells(occupied: np.ndarray) -> np.ndarray:
+    """How far a ray may jump from anywhere in each cell without entering an occupied one
+    [cells], shape (H, W), float64.
+
+    The Euclidean distance between the cell's centre and the nearest occupied cell's
+    centre, less a cell's diagonal (``sqrt 2``: half from a point of the cell to its
+    centre, half from the occupied centre to that cell's nearest point), at least 0.
+    With no occupied cell, the grid's diagonal (any jump is safe).
+    """
+    from scipy import ndimage
+
+    occ = np.asarray(occupied, dtype=bool)
+    if not occ.any():
+        return np.full(occ.shape, float(np.hypot(*occ.shape)) + 2.0)
+    edt = ndimage.distance_transform_edt(~occ)
+    return np.asarray(np.maximum(edt - math.sqrt(2.0), 0.0), dtype=np.float64)
 
 
 @numba.njit(cache=True)
@@ -53,6 +74,131 @@ def _disc_hit(
 
 
 @numba.njit(cache=True)
+def _nearest_disc(
+    x: float,
+    y: float,
+    dx: float,
+    dy: float,
+    self_index: int,
+    max_range_m: float,
+    disc_xy_m: np.ndarray,
+    radius_m: float,
+    buckets: np.ndarray,
+    starts: np.ndarray,
+    members: np.ndarray,
+) -> tuple[float, float]:
+    """The first disc along a unit ray (distance [m], cosine of incidence; inf, 1 if none).
+
+    The discs are hashed in square buckets (``buckets`` = x0, y0, side [m], nx, ny; disc
+    ``members[starts[k]:starts[k + 1]]`` overlap bucket ``k = row nx + col``); the ray
+    walks the buckets it crosses, in order, and stops at the end of the bucket that
+    holds its nearest hit so far.
+    """
+    best = math.inf
+    best_cos = 1.0
+    bx, by, side = buckets[0], buckets[1], buckets[2]
+    nx = int(buckets[3])
+    ny = int(buckets[4])
+    if nx == 0:
+        return best, best_cos
+    u = (x - bx) / side
+    v = (y - by) / side
+    t0 = 0.0
+    t1 = max_range_m / side
+    for lo_, hi_, p_, d_ in ((0.0, float(nx), u, dx), (0.0, float(ny), v, dy)):
+        if d_ == 0.0:
+            if p_ < lo_ or p_ > hi_:
+                return best, best_cos
+        else:
+            ta = (lo_ - p_) / d_
+            tb = (hi_ - p_) / d_
+            t0 = max(t0, min(ta, tb))
+            t1 = min(t1, max(ta, tb))
+    if t1 < t0:
+        return best, best_cos
+    t = t0
+    ut = u + t * dx
+    vt = v + t * dy
+    i = min(max(math.floor(ut), 0), nx - 1)
+    j = min(max(math.floor(vt), 0), ny - 1)
+    inf = math.inf
+    if dx > 0.0:
+        step_i, t_next_i, dt_i = 1, t + (i + 1 - ut) / dx, 1.0 / dx
+    elif dx < 0.0:
+        step_i, t_next_i, dt_i = -1, t + (ut - i) / -dx, -1.0 / dx
+    else:
+        step_i, t_next_i, dt_i = 0, inf, inf
+    if dy > 0.0:
+        step_j, t_next_j, dt_j = 1, t + (j + 1 - vt) / dy, 1.0 / dy
+    elif dy < 0.0:
+        step_j, t_next_j, dt_j = -1, t + (vt - j) / -dy, -1.0 / dy
+    else:
+        step_j, t_next_j, dt_j = 0, inf, inf
+    while 0 <= i < nx and 0 <= j < ny and t <= t1:
+        k = j * nx + i
+        for q in range(starts[k], starts[k + 1]):
+            m = members[q]
+            if m == self_index:
+                continue
+            s, cs = _disc_hit(x, y, dx, dy, disc_xy_m[m, 0], disc_xy_m[m, 1], radius_m)
+            if s < best:
+                best = s
+                best_cos = cs
+        if t_next_i < t_next_j:
+            t = t_next_i
+            t_next_i += dt_i
+            i += step_i
+        else:
+            t = t_next_j
+            t_next_j += dt_j
+            j += step_j
+        if best <= t * side:  # every later bucket lies beyond the hit
+            break
+    return best, best_cos
+
+
+@numba.njit(cache=True)
+def _hash_discs(
+    disc_xy_m: np.ndarray, radius_m: float, side_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Buckets (x0, y0, side, nx, ny), starts and members of :func:`_nearest_disc`."""
+    n = disc_xy_m.shape[0]
+    if n == 0 or radius_m <= 0.0:
+        return np.zeros(5), np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    x0 = disc_xy_m[:, 0].min() - radius_m
+    y0 = disc_xy_m[:, 1].min() - radius_m
+    x1 = disc_xy_m[:, 0].max() + radius_m
+    y1 = disc_xy_m[:, 1].max() + radius_m
+    side = side_m
+    while (x1 - x0) / side * (y1 - y0) / side > 4_000_000.0:
+        side *= 2.0
+    nx = int((x1 - x0) / side) + 1
+    ny = int((y1 - y0) / side) + 1
+    counts = np.zeros(nx * ny + 1, dtype=np.int64)
+    for m in range(n):
+        i0 = int((disc_xy_m[m, 0] - radius_m - x0) / side)
+        i1 = min(int((disc_xy_m[m, 0] + radius_m - x0) / side), nx - 1)
+        j0 = int((disc_xy_m[m, 1] - radius_m - y0) / side)
+        j1 = min(int((disc_xy_m[m, 1] + radius_m - y0) / side), ny - 1)
+        for j in range(j0, j1 + 1):
+            for i in range(i0, i1 + 1):
+                counts[j * nx + i + 1] += 1
+    starts = np.cumsum(counts)
+    fill = starts[:-1].copy()
+    members = np.empty(starts[-1], dtype=np.int64)
+    for m in range(n):
+        i0 = int((disc_xy_m[m, 0] - radius_m - x0) / side)
+        i1 = min(int((disc_xy_m[m, 0] + radius_m - x0) / side), nx - 1)
+        j0 = int((disc_xy_m[m, 1] - radius_m - y0) / side)
+        j1 = min(int((disc_xy_m[m, 1] + radius_m - y0) / side), ny - 1)
+        for j in range(j0, j1 + 1):
+            for i in range(i0, i1 + 1):
+                members[fill[j * nx + i]] = m
+                fill[j * nx + i] += 1
+    return np.array([x0, y0, side, float(nx), float(ny)]), starts, members
+
+
+@numba.njit(cache=True)
 def cast_ray(
     occupied: np.ndarray,
     resolution_m: float,
@@ -62,26 +208,27 @@ def cast_ray(
     y: float,
     angle_rad: float,
     max_range_m: float,
+    self_index: int,
     disc_xy_m: np.ndarray,
     disc_radius_m: float,
-    candidates: np.ndarray,
-    n_candidates: int,
+    buckets: np.ndarray,
+    starts: np.ndarray,
+    members: np.ndarray,
+    clearance: np.ndarray,
 ) -> tuple[float, float]:
     """Range [m] of one ray and the cosine of its incidence; ``(inf, 1)`` past max range.
 
-    ``occupied`` is the (H, W) grid, row 0 at the top; ``candidates[:n_candidates]``
-    index the discs of ``disc_xy_m`` (M, 2) the ray may hit.
+    ``occupied`` is the (H, W) grid, row 0 at the top. The discs of ``disc_xy_m``
+    (M, 2) but ``self_index`` block too, hashed by :func:`_hash_discs`
+    (``buckets``, ``starts``, ``members``). ``clearance`` (H, W) is how far [cells] a
+    ray may jump from anywhere in a cell without meeting an occupied one
+    (:func:`clearance_cells`; zeros: no jumps, the plain traversal).
     """
     dx = math.cos(angle_rad)
     dy = math.sin(angle_rad)
-    best = math.inf
-    best_cos = 1.0
-    for q in range(n_candidates):
-        m = candidates[q]
-        s, cs = _disc_hit(x, y, dx, dy, disc_xy_m[m, 0], disc_xy_m[m, 1], disc_radius_m)
-        if s < best:
-            best = s
-            best_cos = cs
+    best, best_cos = _nearest_disc(
+        x, y, dx, dy, self_index, max_range_m, disc_xy_m, disc_radius_m, buckets, starts, members
+    )
     h, w = occupied.shape
     limit = min(best, max_range_m) / resolution_m  # in cells
     u = (x - origin_x_m) / resolution_m  # continuous column
@@ -103,12 +250,31 @@ def cast_ray(
     t = 0.0
     face = -1  # -1: the start cell, 0: entered across a vertical face, 1: a horizontal one
     while t <= limit:
-        if 0 <= i < w and 0 <= j < h and occupied[h - 1 - j, i]:
-            if face == 0:
-                return t * resolution_m, abs(dx)
-            if face == 1:
-                return t * resolution_m, abs(dy)
-            return 0.0, 1.0
+        if 0 <= i < w and 0 <= j < h:
+            if occupied[h - 1 - j, i]:
+                if face == 0:
+                    return t * resolution_m, abs(dx)
+                if face == 1:
+                    return t * resolution_m, abs(dy)
+                return 0.0, 1.0
+            jump = clearance[h - 1 - j, i]
+            if jump > _MIN_JUMP:  # empty space: jump, then walk on from the landing point
+                t += jump
+                if t > limit:
+                    break
+                u_t = u + t * dx
+                v_t = v + t * dy
+                i = math.floor(u_t)
+                j = math.floor(v_t)
+                if step_i > 0:
+                    t_next_i = t + (i + 1 - u_t) * dt_i
+                elif step_i < 0:
+                    t_next_i = t + (u_t - i) * dt_i
+                if step_j > 0:
+                    t_next_j = t + (j + 1 - v_t) * dt_j
+                elif step_j < 0:
+                    t_next_j = t + (v_t - j) * dt_j
+                continue
         if t_next_i < t_next_j:
             t = t_next_i
             t_next_i += dt_i
@@ -134,37 +300,33 @@ def _cast_team(
     bearings_rad: np.ndarray,
     max_range_m: float,
     robot_radius_m: float,
+    clearance: np.ndarray,
     out_range: np.ndarray,
     out_cos: np.ndarray,
 ) -> None:
     n = poses.shape[0]
     k = bearings_rad.shape[0]
     xy = np.ascontiguousarray(poses[:, :2])
-    candidates = np.empty(n, dtype=np.int64)
-    reach = max_range_m + robot_radius_m
+    side = max(2.5 * robot_radius_m, 4.0 * resolution_m)
+    buckets, starts, members = _hash_discs(xy, robot_radius_m, side)
     for a in range(n):
-        x = poses[a, 0]
-        y = poses[a, 1]
-        count = 0
-        if robot_radius_m > 0.0:
-            for b in range(n):
-                if b != a and abs(xy[b, 0] - x) <= reach and abs(xy[b, 1] - y) <= reach:
-                    candidates[count] = b
-                    count += 1
         for q in range(k):
             r, c = cast_ray(
                 occupied,
                 resolution_m,
                 origin_x_m,
                 origin_y_m,
-                x,
-                y,
+                poses[a, 0],
+                poses[a, 1],
                 poses[a, 2] + bearings_rad[q],
                 max_range_m,
+                a,
                 xy,
                 robot_radius_m,
-                candidates,
-                count,
+                buckets,
+                starts,
+                members,
+                clearance,
             )
             out_range[a, q] = r
             out_cos[a, q] = c
@@ -178,17 +340,25 @@ def cast_team(
     bearings_rad: FloatArray,
     max_range_m: float,
     robot_radius_m: float,
+    clearance: np.ndarray | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Ranges [m] (N, K) and incidence cosines (N, K) of every robot's rays.
 
     Ray ``q`` of robot ``a`` starts at its centre, at ``theta_a + bearings_rad[q]``; the
     other robots are discs of ``robot_radius_m`` (0: robots are transparent).
+    ``clearance`` (:func:`clearance_cells` of ``occupied``) lets rays jump through empty
+    space; None: cell by cell all the way (the same ranges, slower on open maps).
     """
+    if clearance is None:
+        clearance = np.zeros(np.shape(occupied))
     occ = np.ascontiguousarray(occupied, dtype=np.bool_)
     p = np.ascontiguousarray(poses, dtype=np.float64)
     b = np.ascontiguousarray(bearings_rad, dtype=np.float64)
     out_range = np.empty((p.shape[0], b.shape[0]))
     out_cos = np.empty((p.shape[0], b.shape[0]))
+    # one core: robots spread over the cores with numba.prange took 7x longer for 1,000
+    # robots and 8 rays each (14.5 ms against 2.0 ms) on a busy two-core machine, where
+    # waking the threads costs more than a scan
     _cast_team(
         occ,
         float(resolution_m),
@@ -198,6 +368,7 @@ def cast_team(
         b,
         float(max_range_m),
         float(robot_radius_m),
+        np.ascontiguousarray(clearance, dtype=np.float64),
         out_range,
         out_cos,
     )
