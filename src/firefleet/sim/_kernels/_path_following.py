@@ -275,7 +275,7 @@ def _heard_minimum_ideal(
 ) -> float:  # pragma: no cover - compiled
     """The slowest progress broadcast at the last tick, one tick on (every robot hears
     every broadcast over the ideal link)."""
-    zmin = zeta[0] + rate[0] * dt
+    zmin: float = zeta[0] + rate[0] * dt
     for m in range(1, zeta.shape[0]):
         zmin = min(zmin, zeta[m] + rate[m] * dt)
     return zmin
