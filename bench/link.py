@@ -38,7 +38,7 @@ FLOOR_FRACTION = 0.20
 
 def _step_s(repeats: int) -> float:
     """Best wall time of one path-following tick of the 1,000-robot team [s]."""
-    team = large_team(firefleet.load_scenario("coop-different-paths"), N_ROBOTS, 2.0)
+    team = large_team(firefleet.load_scenario("coop-different-paths"), N_ROBOTS, 20.0)
     firefleet.simulate(team, record_every=10)  # warm-up, compile
     best = float("inf")
     for _ in range(repeats):

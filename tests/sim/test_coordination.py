@@ -47,7 +47,7 @@ def test_the_fault_slows_the_robot_and_without_it_closed_equals_the_clock_bit_fo
     scn = load_scenario("coop-different-paths")  # the whole run: the law never holds
     kind = task_kind("path-following")
     rec = np.arange(0, scn.n_steps + 1, 10)
-    closed = kind.run(scn, rec).arrays()
+    closed = kind.run(_with(scn, coordination="closed"), rec).arrays()
     clock = kind.run(_with(scn, coordination="clock"), rec).arrays()
     for key, value in clock.items():
         if key != "message_age_max_s":  # nothing is heard on the clock

@@ -75,8 +75,8 @@ class PathFollowing:
     coordination : {"closed", "clock"}
         ``closed``: each robot broadcasts its progress and no robot's desired point
         runs more than ``lead_segments`` ahead of the slowest progress it has heard
-        (``firefleet.sim.kinds.path_following``); ``clock``: the open-loop common
-        release schedule alone (2.6.3).
+        (``firefleet.sim.kinds.path_following``); ``clock`` (the default): the
+        open-loop common release schedule alone (2.6.3).
     lead_segments : int
         The closed law's bound [segments].
     """
@@ -88,7 +88,7 @@ class PathFollowing:
     arrival_radius_m: float = 0.05
     controller_fis: str = ""
     lambda_fis: str = ""
-    coordination: Literal["closed", "clock"] = "closed"
+    coordination: Literal["closed", "clock"] = "clock"
     lead_segments: int = 10
 
     def __post_init__(self) -> None:

@@ -269,6 +269,41 @@ def _path_following_robot(
         done[i] = 1.0
 
 
+@numba.njit(cache=True)
+def _heard_minimum_ideal(
+    zeta: FloatArray, rate: FloatArray, dt: float
+) -> float:  # pragma: no cover - compiled
+    """The slowest progress broadcast at the last tick, one tick on (every robot hears
+    every broadcast over the ideal link)."""
+    zmin: float = zeta[0] + rate[0] * dt
+    for m in range(1, zeta.shape[0]):
+        zmin = min(zmin, zeta[m] + rate[m] * dt)
+    return zmin
+
+
+@numba.njit(cache=True)
+def _next_release(
+    k: int, k1: int, dt: float, period: float, j_state: IntArray, done: FloatArray
+) -> int:  # pragma: no cover - compiled
+    """The end of the run of ticks from ``k`` on in which only tick ``k`` may release a
+    point (the law reads the team's progress only there, so the robots are independent
+    until the end): ``k + 1`` if some robot's clock is due at ``k``, else the first
+    tick at which one falls due (at most ``k1``). Robots that have arrived hold nothing
+    and are left out."""
+    kk = k1
+    for i in range(j_state.shape[0]):
+        if done[i] > 0.0:
+            continue
+        j_prev, held = j_state[i, 0], j_state[i, 1]
+        if math.floor((k - held) * dt / period + 1e-9) + 1 > j_prev:
+            return min(k + 1, k1)
+        t = k + 1
+        while t < kk and math.floor((t - held) * dt / period + 1e-9) + 1 <= j_prev:
+            t += 1
+        kk = min(kk, t)
+    return kk
+
+
 # The two fuzzy systems come in as their FisTables fields, flat: passed as NamedTuples
 # the kernel measured 30 % slower, the fields' arrays then reached through the tuple on
 # every access. The serial and the parallel kernel are two functions (not one function
@@ -492,24 +527,24 @@ def path_following_chunk_coupled(
 ) -> None:  # pragma: no cover - compiled
     """:func:`path_following_chunk` with closed-loop coordination over an ideal link.
 
-    Tick by tick, every robot hears every robot's progress broadcast the tick before
-    (``zeta_out`` [segments] and ``rate_out`` [segments/s], predicted one tick on) and
-    its desired point runs at most ``lead`` segments ahead of the slowest
+    Every robot hears every robot's progress broadcast the tick before (``zeta_out``
+    [segments] and ``rate_out`` [segments/s], predicted one tick on) and its next point
+    is held while it would run more than ``lead`` segments ahead of the slowest
     (``firefleet.sim.kinds.path_following``); before the first broadcast (k = 0) the
-    clock alone releases the points.
+    clock alone releases the points. The law reads the team only at a tick where some
+    robot's clock falls due (:func:`_next_release`), so the robots run independently,
+    each in its registers, from one such tick to the next.
     """
     n = pose.shape[0]
-    for k in range(k0, k1):
-        zmin = math.nan
-        if k > 0:
-            zmin = zeta_out[0] + rate_out[0] * dt
-            for m in range(1, n):
-                zmin = min(zmin, zeta_out[m] + rate_out[m] * dt)
+    k = k0
+    while k < k1:
+        zmin = _heard_minimum_ideal(zeta_out, rate_out, dt) if k > 0 else math.nan
+        kk = _next_release(k, k1, dt, period, j_state, done)
         for i in range(n):
             _path_following_robot(
                 i,
                 k,
-                k + 1,
+                kk,
                 zmin,
                 n_steps,
                 dt,
@@ -562,6 +597,7 @@ def path_following_chunk_coupled(
                 ctl_rec,
                 desired_rec,
             )
+        k = kk
 
 
 @numba.njit(cache=True, parallel=True)
@@ -738,17 +774,15 @@ def path_following_chunk_coupled_parallel(
     """:func:`path_following_chunk_coupled` with each tick's robots spread over every
     core (the same result bit for bit: the slowest progress is taken before the tick)."""
     n = pose.shape[0]
-    for k in range(k0, k1):
-        zmin = math.nan
-        if k > 0:
-            zmin = zeta_out[0] + rate_out[0] * dt
-            for m in range(1, n):
-                zmin = min(zmin, zeta_out[m] + rate_out[m] * dt)
+    k = k0
+    while k < k1:
+        zmin = _heard_minimum_ideal(zeta_out, rate_out, dt) if k > 0 else math.nan
+        kk = _next_release(k, k1, dt, period, j_state, done)
         for i in numba.prange(n):
             _path_following_robot(
                 i,
                 k,
-                k + 1,
+                kk,
                 zmin,
                 n_steps,
                 dt,
@@ -801,3 +835,4 @@ def path_following_chunk_coupled_parallel(
                 ctl_rec,
                 desired_rec,
             )
+        k = kk

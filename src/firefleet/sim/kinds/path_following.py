@@ -15,12 +15,12 @@ For each robot of the team (Figure 10), on the world loop (:mod:`firefleet.sim.l
 The default stages run as one compiled chunk (:mod:`firefleet.sim._kernels`), called
 from :func:`_kernel_chunk` only.
 
-Coordination (``command.coordination``): ``closed`` (the default) closes the release
+Coordination (``command.coordination``): ``closed`` closes the release
 of the desired points through the team's progress as each robot hears it over the
 link (:mod:`firefleet.control.coordination`: no robot's point runs more than
 ``lead_segments`` ahead of the slowest progress it has heard); ``clock`` is the
-deliverable's open-loop common schedule alone, where a team run equals its robots run
-one by one. With every robot on time the two release the same points (the built-in
+deliverable's open-loop common schedule alone (the default), where a team run equals
+its robots run one by one. With every robot on time the two release the same points (the built-in
 experiments give the same results bit for bit); they part when a robot falls behind
 (``coop-motor-fault``). Each robot's broadcast is the outbox's ``zeta`` [segments] and
 ``zeta_rate`` [segments/s], (N,); the inbox brings them back either as (N,), heard
@@ -133,7 +133,7 @@ class PathFollowingParams:
     controller: PathFollowingController
     trajectory: Trajectory
     geometry: RobotGeometry
-    closed: bool = True
+    closed: bool = False
     lead_segments: int = 10
     timeout_s: float = 1.0
 
