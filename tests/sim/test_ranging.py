@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import math
 from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 import pytest
@@ -87,7 +88,11 @@ def free_pose(grid: OccupancyGrid, rng: np.random.Generator) -> tuple[float, flo
             return x, y, rng.uniform(-np.pi, np.pi)
 
 
-NO_DROPOUT = {"dropout": 0.0, "dropout_incidence_deg": 90.0, "dropout_width_deg": 1e-3}
+NO_DROPOUT: dict[str, Any] = {
+    "dropout": 0.0,
+    "dropout_incidence_deg": 90.0,
+    "dropout_width_deg": 1e-3,
+}
 """Echoes lost only past 90 degrees of incidence: never."""
 NOISELESS = LidarParams(beams=360, fov_deg=360.0, max_range_m=30.0, noise_m=0.0)
 
@@ -202,10 +207,10 @@ def test_compiled_equals_python_and_batch_equals_one_at_a_time() -> None:
         (ultrasonic_scan, UltrasonicParams(noise_m=0.0, **NO_DROPOUT)),
         (stereo_scan, StereoScanParams(disparity_noise_px=0.0)),
     ):
-        batch = scan(grid, poses, params, robot_radius_m=0.0, rng=np.random.default_rng(0))  # type: ignore[operator]
+        batch = scan(grid, poses, params, robot_radius_m=0.0, rng=np.random.default_rng(0))  # type: ignore[arg-type]
         singles = np.vstack(
             [
-                scan(grid, p[None], params, robot_radius_m=0.0, rng=np.random.default_rng(0))  # type: ignore[operator]
+                scan(grid, p[None], params, robot_radius_m=0.0, rng=np.random.default_rng(0))  # type: ignore[arg-type]
                 for p in poses
             ]
         )
@@ -348,7 +353,7 @@ def test_stage_reads_at_sensor_rates_and_holds_between() -> None:
         (lambda: UltrasonicParams(fov_deg=-1.0), "ultrasonic.fov_deg"),
         (lambda: UltrasonicParams(min_range_m=5.0), "ultrasonic.min_range_m"),
         (lambda: UltrasonicParams(dropout=1.5), "ultrasonic.dropout"),
-        (lambda: LidarParams(beams=2.5), "lidar.beams"),
+        (lambda: LidarParams(beams=2.5), "lidar.beams"),  # type: ignore[arg-type]
         (lambda: LidarParams(max_range_m=float("nan")), "lidar.max_range_m"),
         (lambda: LidarParams(fov_deg=400.0), "lidar.fov_deg"),
         (lambda: StereoScanParams(baseline_m=0.0), "stereo.baseline_m"),

@@ -236,7 +236,7 @@ def _plan(
         h, w = grid.shape
         r0, r1 = max(rc[0] - k, 0), min(rc[0] + k + 1, h)
         c0, c1 = max(rc[1] - k, 0), min(rc[1] + k + 1, w)
-        open_cells = np.argwhere(~costmap.blocked[r0:r1, c0:c1]) + [r0, c0]
+        open_cells = np.argwhere(~costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
         if len(open_cells):
             centres = grid.center_of(open_cells)
             near = centres[np.argmin(np.hypot(*(centres - start).T))]
