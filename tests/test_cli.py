@@ -64,7 +64,22 @@ def test_run_yaml_path_with_seed_and_no_plots(tmp_path: Path) -> None:
     path.write_text(GOOD)
     out = tmp_path / "o"
     assert main(["run", str(path), "--out", str(out), "--seed", "3", "--no-plots"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "metrics.json", "result.npz"]
+    # a short run writes its MCAP log by default (under MCAP_AUTO_BYTES)
+    assert sorted(p.name for p in out.iterdir()) == [
+        MANIFEST, "metrics.json", "result.npz", "run.mcap"
+    ]  # fmt: skip
+
+
+def test_mcap_only_when_small_unless_asked(tmp_path: Path) -> None:
+    # coop-different-paths: 3 robots x 8,001 samples, about 7 MB of MCAP: not by default
+    out = tmp_path / "big"
+    assert main(["run", "coop-different-paths", "--out", str(out), "--no-plots"]) == 0
+    assert not (out / "run.mcap").exists()
+    assert main(["run", "coop-different-paths", "--out", str(out), "--no-plots", "--mcap"]) == 0
+    assert (out / "run.mcap").stat().st_size > 1_000_000
+    small = tmp_path / "small"
+    assert main(["run", "motor-pid", "--out", str(small), "--no-plots", "--no-mcap"]) == 0
+    assert not (small / "run.mcap").exists()
 
 
 def test_failed_claim_exits_1(tmp_path: Path) -> None:
@@ -204,7 +219,7 @@ def test_run_into_a_previous_run_leaves_only_the_new_run(tmp_path: Path) -> None
     out = tmp_path / "o"
     assert main(["run", str(path), "--out", str(out)]) == 0
     assert (out / "response.png").is_file()
-    assert main(["run", str(path), "--out", str(out), "--no-plots"]) == 0
+    assert main(["run", str(path), "--out", str(out), "--no-plots", "--no-mcap"]) == 0
     assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "metrics.json", "result.npz"]
     manifest = json.loads((out / MANIFEST).read_text())
     assert manifest["files"] == ["metrics.json", "result.npz"]

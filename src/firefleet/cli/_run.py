@@ -21,7 +21,13 @@ from firefleet.cli._console import (
     metrics_table,
     progress_bar,
 )
-from firefleet.cli._serve import add_run_flags, dashboard_screenshot, live_mode, mcap_of
+from firefleet.cli._serve import (
+    add_run_flags,
+    dashboard_screenshot,
+    live_mode,
+    mcap_of,
+    mcap_wanted,
+)
 from firefleet.errors import InputError
 from firefleet.outputs import json_text, run_record, staged_dir
 from firefleet.scenarios.registry import builtin_names, load_scenario
@@ -78,14 +84,15 @@ def run_into(
     plots: bool,
     err: Console,
     command_line: Sequence[str],
-    mcap: bool = False,
+    mcap: bool | None = False,
     simulator: Any = None,
 ) -> tuple[dict[str, Any], tuple[str, ...]]:
     """Run a scenario and write its outputs into ``folder``; returns (metrics doc, figures).
 
     ``metrics.json`` also names what made the run (``provenance``: firefleet's version,
     the git commit, the seed and ``command_line``); the returned document does not.
-    ``mcap``: also write ``run.mcap``; ``simulator``: runs the scenario instead of
+    ``mcap``: also write ``run.mcap`` (``None``: when it is small, :func:`mcap_wanted`);
+    ``simulator``: runs the scenario instead of
     :func:`simulate` (``simulator(scenario, progress)``, the live mode).
     """
     with progress_bar(err, scenario.name) as progress:
@@ -97,7 +104,7 @@ def run_into(
     written = {"scenario": document["scenario"], "provenance": provenance, **document}
     (folder / "metrics.json").write_text(json_text(written), encoding="utf-8")
     (folder / "result.npz").write_bytes(result.to_npz_bytes())
-    if mcap:
+    if mcap_wanted(mcap, result.t.shape[0], result.pose.shape[1]):
         (folder / "run.mcap").write_bytes(mcap_of(result, written))
     names: tuple[str, ...] = ()
     if plots:
