@@ -271,7 +271,7 @@ class Sensors(_Base):
     """What robot ``robot``'s sensors read at tick ``tick`` (time ``t_s`` [s]).
 
     ``counts``: the two wheel encoders' counts [counts]; ``measured_rad_s``: their
-    measured wheel speeds [rad/s] (left, right)."""
+    measured wheel speeds [rad/s] (right, left: the drive stack's order)."""
 
     t_s: float
     counts: tuple[float, float]
