@@ -3,8 +3,9 @@
 Two fused loops run a whole team for a range of steps, each robot's state held in
 registers while it runs the range (robots are independent: a team equals its robots run
 one by one, and a parallel run equals a serial one bit for bit);
-:func:`path_following_chunk_coupled` runs the path-following team tick by tick instead,
-for the closed-loop coordination that couples the robots through their broadcasts:
+with ``coupled``, :func:`path_following_chunk` runs the team from one release tick to the
+next instead, for the closed-loop coordination that couples the robots through their
+broadcasts:
 
 :func:`path_following_chunk`
     The cooperative path-following hierarchy (deliverable section 2.6, Figure 10): the
@@ -37,8 +38,6 @@ from firefleet.sim._kernels._motor import (
 from firefleet.sim._kernels._parallel import PARALLEL_MIN_ROBOTS, PARALLEL_MIN_ROBOTS_ONE_PIECE
 from firefleet.sim._kernels._path_following import (
     path_following_chunk,
-    path_following_chunk_coupled,
-    path_following_chunk_coupled_parallel,
     path_following_chunk_parallel,
 )
 
@@ -49,8 +48,6 @@ __all__ = [
     "motor_team_chunk",
     "motor_team_chunk_parallel",
     "path_following_chunk",
-    "path_following_chunk_coupled",
-    "path_following_chunk_coupled_parallel",
     "path_following_chunk_parallel",
     "run_motor_team",
 ]

@@ -313,6 +313,7 @@ def _next_release(
 def path_following_chunk(
     k0: int,
     k1: int,
+    coupled: bool,
     n_steps: int,
     dt: float,
     points: FloatArray,
@@ -366,10 +367,22 @@ def path_following_chunk(
 ) -> None:  # pragma: no cover - compiled
     """Steps ``k0 <= k < k1`` of a path-following team, in place.
 
+    With ``coupled`` (closed-loop coordination over an ideal link), every robot hears
+    every robot's progress broadcast the tick before (``zeta_out`` [segments] and
+    ``rate_out`` [segments/s], predicted one tick on) and its next point
+    is held while it would run more than ``lead`` segments ahead of the slowest
+    (``firefleet.sim.kinds.path_following``); before the first broadcast (k = 0) the
+    clock alone releases the points. The law reads the team only at a tick where some
+    robot's clock falls due (:func:`_next_release`), so the robots run independently,
+    each in its registers, from one such tick to the next. Without it the robots are
+    independent: each runs the whole range in its registers.
+
     Parameters
     ----------
     k0, k1 : int
         The range of steps; step ``n_steps`` only records (no plant step after it).
+    coupled : bool
+        Whether the closed-loop coordination law holds points back (above).
     n_steps : int
         Steps of the whole run.
     dt : float
@@ -411,135 +424,13 @@ def path_following_chunk(
         ``sim.kinds.path_following.CONTROL_SERIES``.
     desired_rec : ndarray, shape (T, N, 2)
     """
-    for i in range(pose.shape[0]):  # robots are independent
-        _path_following_robot(
-            i,
-            k0,
-            k1,
-            math.nan,
-            n_steps,
-            dt,
-            points,
-            spacing,
-            period,
-            pose,
-            odom,
-            wheel,
-            history,
-            motor,
-            pid,
-            geom,
-            load,
-            cpr,
-            done,
-            faults,
-            lead,
-            j_state,
-            zeta_out,
-            rate_out,
-            m_kind,
-            m_par,
-            m_in,
-            m_range,
-            m_rmf,
-            m_rnot,
-            m_rw,
-            m_ror,
-            m_rout,
-            m_coef,
-            m_mid,
-            m_flags,
-            l_kind,
-            l_par,
-            l_in,
-            l_range,
-            l_rmf,
-            l_rnot,
-            l_rw,
-            l_ror,
-            l_rout,
-            l_coef,
-            l_mid,
-            l_flags,
-            rec_index,
-            pose_rec,
-            odom_rec,
-            wheel_rec,
-            ctl_rec,
-            desired_rec,
-        )
-
-
-@numba.njit(cache=True)
-def path_following_chunk_coupled(
-    k0: int,
-    k1: int,
-    n_steps: int,
-    dt: float,
-    points: FloatArray,
-    spacing: FloatArray,
-    period: float,
-    pose: FloatArray,
-    odom: FloatArray,
-    wheel: FloatArray,
-    history: FloatArray,
-    motor: FloatArray,
-    pid: FloatArray,
-    geom: FloatArray,
-    load: FloatArray,
-    cpr: float,
-    done: FloatArray,
-    faults: FloatArray,
-    lead: int,
-    j_state: IntArray,
-    zeta_out: FloatArray,
-    rate_out: FloatArray,
-    m_kind: IntArray,
-    m_par: FloatArray,
-    m_in: IntArray,
-    m_range: FloatArray,
-    m_rmf: IntArray,
-    m_rnot: NDArray[np.bool_],
-    m_rw: FloatArray,
-    m_ror: NDArray[np.bool_],
-    m_rout: IntArray,
-    m_coef: FloatArray,
-    m_mid: FloatArray,
-    m_flags: IntArray,
-    l_kind: IntArray,
-    l_par: FloatArray,
-    l_in: IntArray,
-    l_range: FloatArray,
-    l_rmf: IntArray,
-    l_rnot: NDArray[np.bool_],
-    l_rw: FloatArray,
-    l_ror: NDArray[np.bool_],
-    l_rout: IntArray,
-    l_coef: FloatArray,
-    l_mid: FloatArray,
-    l_flags: IntArray,
-    rec_index: IntArray,
-    pose_rec: FloatArray,
-    odom_rec: FloatArray,
-    wheel_rec: FloatArray,
-    ctl_rec: FloatArray,
-    desired_rec: FloatArray,
-) -> None:  # pragma: no cover - compiled
-    """:func:`path_following_chunk` with closed-loop coordination over an ideal link.
-
-    Every robot hears every robot's progress broadcast the tick before (``zeta_out``
-    [segments] and ``rate_out`` [segments/s], predicted one tick on) and its next point
-    is held while it would run more than ``lead`` segments ahead of the slowest
-    (``firefleet.sim.kinds.path_following``); before the first broadcast (k = 0) the
-    clock alone releases the points. The law reads the team only at a tick where some
-    robot's clock falls due (:func:`_next_release`), so the robots run independently,
-    each in its registers, from one such tick to the next.
-    """
     n = pose.shape[0]
     k = k0
     while k < k1:
-        zmin = _heard_minimum_ideal(zeta_out, rate_out, dt) if k > 0 else math.nan
-        kk = _next_release(k, k1, dt, period, j_state, done)
+        zmin, kk = math.nan, k1
+        if coupled:  # the team is read at each tick where a robot's clock falls due
+            zmin = _heard_minimum_ideal(zeta_out, rate_out, dt) if k > 0 else math.nan
+            kk = _next_release(k, k1, dt, period, j_state, done)
         for i in range(n):
             _path_following_robot(
                 i,
@@ -604,6 +495,7 @@ def path_following_chunk_coupled(
 def path_following_chunk_parallel(
     k0: int,
     k1: int,
+    coupled: bool,
     n_steps: int,
     dt: float,
     points: FloatArray,
@@ -655,129 +547,15 @@ def path_following_chunk_parallel(
     ctl_rec: FloatArray,
     desired_rec: FloatArray,
 ) -> None:  # pragma: no cover - compiled
-    """:func:`path_following_chunk` with the robots spread over every core (the same
-    result bit for bit)."""
-    for i in numba.prange(pose.shape[0]):  # robots are independent
-        _path_following_robot(
-            i,
-            k0,
-            k1,
-            math.nan,
-            n_steps,
-            dt,
-            points,
-            spacing,
-            period,
-            pose,
-            odom,
-            wheel,
-            history,
-            motor,
-            pid,
-            geom,
-            load,
-            cpr,
-            done,
-            faults,
-            lead,
-            j_state,
-            zeta_out,
-            rate_out,
-            m_kind,
-            m_par,
-            m_in,
-            m_range,
-            m_rmf,
-            m_rnot,
-            m_rw,
-            m_ror,
-            m_rout,
-            m_coef,
-            m_mid,
-            m_flags,
-            l_kind,
-            l_par,
-            l_in,
-            l_range,
-            l_rmf,
-            l_rnot,
-            l_rw,
-            l_ror,
-            l_rout,
-            l_coef,
-            l_mid,
-            l_flags,
-            rec_index,
-            pose_rec,
-            odom_rec,
-            wheel_rec,
-            ctl_rec,
-            desired_rec,
-        )
-
-
-@numba.njit(cache=True, parallel=True)
-def path_following_chunk_coupled_parallel(
-    k0: int,
-    k1: int,
-    n_steps: int,
-    dt: float,
-    points: FloatArray,
-    spacing: FloatArray,
-    period: float,
-    pose: FloatArray,
-    odom: FloatArray,
-    wheel: FloatArray,
-    history: FloatArray,
-    motor: FloatArray,
-    pid: FloatArray,
-    geom: FloatArray,
-    load: FloatArray,
-    cpr: float,
-    done: FloatArray,
-    faults: FloatArray,
-    lead: int,
-    j_state: IntArray,
-    zeta_out: FloatArray,
-    rate_out: FloatArray,
-    m_kind: IntArray,
-    m_par: FloatArray,
-    m_in: IntArray,
-    m_range: FloatArray,
-    m_rmf: IntArray,
-    m_rnot: NDArray[np.bool_],
-    m_rw: FloatArray,
-    m_ror: NDArray[np.bool_],
-    m_rout: IntArray,
-    m_coef: FloatArray,
-    m_mid: FloatArray,
-    m_flags: IntArray,
-    l_kind: IntArray,
-    l_par: FloatArray,
-    l_in: IntArray,
-    l_range: FloatArray,
-    l_rmf: IntArray,
-    l_rnot: NDArray[np.bool_],
-    l_rw: FloatArray,
-    l_ror: NDArray[np.bool_],
-    l_rout: IntArray,
-    l_coef: FloatArray,
-    l_mid: FloatArray,
-    l_flags: IntArray,
-    rec_index: IntArray,
-    pose_rec: FloatArray,
-    odom_rec: FloatArray,
-    wheel_rec: FloatArray,
-    ctl_rec: FloatArray,
-    desired_rec: FloatArray,
-) -> None:  # pragma: no cover - compiled
-    """:func:`path_following_chunk_coupled` with each tick's robots spread over every
-    core (the same result bit for bit: the slowest progress is taken before the tick)."""
+    """:func:`path_following_chunk` with each tick's robots spread over every core (the
+    same result bit for bit: the slowest progress is taken before the tick)."""
     n = pose.shape[0]
     k = k0
     while k < k1:
-        zmin = _heard_minimum_ideal(zeta_out, rate_out, dt) if k > 0 else math.nan
-        kk = _next_release(k, k1, dt, period, j_state, done)
+        zmin, kk = math.nan, k1
+        if coupled:
+            zmin = _heard_minimum_ideal(zeta_out, rate_out, dt) if k > 0 else math.nan
+            kk = _next_release(k, k1, dt, period, j_state, done)
         for i in numba.prange(n):
             _path_following_robot(
                 i,

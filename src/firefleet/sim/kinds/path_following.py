@@ -57,8 +57,6 @@ from firefleet.sim._kernels import (
     PARALLEL_MIN_ROBOTS,
     PARALLEL_MIN_ROBOTS_ONE_PIECE,
     path_following_chunk,
-    path_following_chunk_coupled,
-    path_following_chunk_coupled_parallel,
     path_following_chunk_parallel,
 )
 from firefleet.sim.link import ages
@@ -369,17 +367,10 @@ def _kernel_chunk(buffers: _Buffers, k0: int, k1: int, *, one_piece: bool = Fals
     ``PARALLEL_MIN_ROBOTS_ONE_PIECE``); the result is the same bit for bit. Closed-loop
     coordination couples the robots: the kernel then goes tick by tick."""
     n = buffers.scenario.n_robots
-    if buffers.closed:
-        coupled = (
-            path_following_chunk_coupled_parallel
-            if n >= PARALLEL_MIN_ROBOTS
-            else path_following_chunk_coupled
-        )
-        coupled(k0, k1, *buffers.args)
-        return
-    parallel = n >= (PARALLEL_MIN_ROBOTS_ONE_PIECE if one_piece else PARALLEL_MIN_ROBOTS)
+    whole = one_piece and not buffers.closed  # a coupled team goes tick by tick anyway
+    parallel = n >= (PARALLEL_MIN_ROBOTS_ONE_PIECE if whole else PARALLEL_MIN_ROBOTS)
     kernel = path_following_chunk_parallel if parallel else path_following_chunk
-    kernel(k0, k1, *buffers.args)
+    kernel(k0, k1, buffers.closed, *buffers.args)
 
 
 def _fused_run(
