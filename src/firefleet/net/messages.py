@@ -72,6 +72,7 @@ firefleet.net.messages.MessageError: foreign: run id 0000000000000008 expected, 
 
 from __future__ import annotations
 
+import abc
 import math
 import struct
 from dataclasses import dataclass
@@ -179,7 +180,7 @@ def _uint(name: str, value: int, top: int) -> None:
 
 
 @dataclass(frozen=True)
-class _Base:
+class _Base(abc.ABC):
     """The header's fields: the run, the robot (or :data:`PLANT`), the tick."""
 
     run_id: int
@@ -195,8 +196,9 @@ class _Base:
         _uint("robot", self.robot, PLANT)
         _uint("tick", self.tick, _U32)
 
+    @abc.abstractmethod
     def body(self) -> bytes:
-        raise NotImplementedError
+        """The body's bytes (each message type lays out its own)."""
 
     def body_size(self) -> int:
         return self.BODY.size
