@@ -268,7 +268,7 @@ def _section_27(
     err: Console,
 ) -> str:
     """Section 2.7's runs (thermal, stereo, SLAM) into the report; what was left out."""
-    from firefleet.report.html import ReportEntry, ReportRun
+    from firefleet.report.html import ReportRun
     from firefleet.report.sensing import stereo_runs, thermal_run
     from firefleet.report.slam import slam_report_runs
 
@@ -293,27 +293,7 @@ def _section_27(
     if park is not None and not any(r.name == "slam-victoria-park" for r in runs):
         missing.append("Victoria Park's GTSAM reference (the gtsam package is not installed)")
     for run in runs:
-        folder = stage / run.name
-        folder.mkdir()
-        for name, data_bytes in run.files.items():
-            (folder / name).write_bytes(data_bytes)
-        (folder / "metrics.json").write_text(json_text(run.document), encoding="utf-8")
-        entries.append(
-            ReportEntry(
-                name=run.name,
-                title=run.title,
-                reproduces=run.reproduces,
-                deliverable_says=run.deliverable_says,
-                folder=run.name,
-                figures=run.figures,
-                document=run.document,
-                command=run.command,
-                links=("metrics.json",),
-                captions=run.captions,
-            )
-        )
-        mark = "[green]ok" if all_passed(run.document) else "[red]CLAIM FAILED"
-        out.print(f"{run.name:<24} {mark}  {escape(run.reproduces)}")
+        entries.append(_write_report_run(stage, run, out))
     if not missing:
         return ""
     return (
@@ -323,34 +303,38 @@ def _section_27(
     )
 
 
-def _section_25(stage: Path, entries: list[Any], out: Console, err: Console) -> None:
-    """Section 2.5's study (cooperation over an imperfect link) into the report."""
+def _write_report_run(stage: Path, run: Any, out: Console) -> Any:
+    """A report run's files and ``metrics.json`` into its folder; its report entry."""
     from firefleet.report.html import ReportEntry
-    from firefleet.report.network import link_study_run
 
-    with progress_bar(err, "section 2.5: the link study") as progress:
-        run = link_study_run(progress=progress)
     folder = stage / run.name
     folder.mkdir()
     for name, data_bytes in run.files.items():
         (folder / name).write_bytes(data_bytes)
     (folder / "metrics.json").write_text(json_text(run.document), encoding="utf-8")
-    entries.append(
-        ReportEntry(
-            name=run.name,
-            title=run.title,
-            reproduces=run.reproduces,
-            deliverable_says=run.deliverable_says,
-            folder=run.name,
-            figures=run.figures,
-            document=run.document,
-            command=run.command,
-            links=("metrics.json",),
-            captions=run.captions,
-        )
-    )
     mark = "[green]ok" if all_passed(run.document) else "[red]CLAIM FAILED"
     out.print(f"{run.name:<24} {mark}  {escape(run.reproduces)}")
+    return ReportEntry(
+        name=run.name,
+        title=run.title,
+        reproduces=run.reproduces,
+        deliverable_says=run.deliverable_says,
+        folder=run.name,
+        figures=run.figures,
+        document=run.document,
+        command=run.command,
+        links=("metrics.json",),
+        captions=run.captions,
+    )
+
+
+def _section_25(stage: Path, entries: list[Any], out: Console, err: Console) -> None:
+    """Section 2.5's study (cooperation over an imperfect link) into the report."""
+    from firefleet.report.network import link_study_run
+
+    with progress_bar(err, "section 2.5: the link study") as progress:
+        run = link_study_run(progress=progress)
+    entries.append(_write_report_run(stage, run, out))
 
 
 def report_footer(record: Mapping[str, Any], seeds: Mapping[str, int]) -> str:
