@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError, check_fields
+from firefleet.world._stencil import neighbour_sum
 
 __all__ = ["HEAT", "SMOKE", "FieldParams", "diffuse_step", "stable_substeps"]
 
@@ -152,15 +153,13 @@ def diffuse_step(
     r = params.diffusivity_m2_s * h / resolution_m**2
     openf = open_m.astype(float)
     # open neighbours of each cell (edges and walls closed): the no-flux Laplacian
-    po = np.pad(openf, 1)
-    neighbours = po[:-2, 1:-1] + po[2:, 1:-1] + po[1:-1, :-2] + po[1:-1, 2:]
+    neighbours = neighbour_sum(openf)
     u = np.where(open_m, u, params.ambient)
     if params.pinned:
         u = np.where(fire, params.source, u)
     add = 0.0 if params.pinned else params.source * h
     for _ in range(n):
-        pu = np.pad(u * openf, 1)
-        flux_in = pu[:-2, 1:-1] + pu[2:, 1:-1] + pu[1:-1, :-2] + pu[1:-1, 2:]
+        flux_in = neighbour_sum(u * openf)
         lap = flux_in - neighbours * u
         u = u + r * lap - params.decay_per_s * h * (u - params.ambient)
         u = np.where(fire, params.source, u) if params.pinned else u + np.where(fire, add, 0.0)

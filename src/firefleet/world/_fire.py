@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike
 
 from firefleet._typing import BoolArray, FloatArray
 from firefleet.errors import InputError, check_fields
+from firefleet.world._stencil import neighbour_sum
 
 __all__ = [
     "BURNING",
@@ -166,17 +167,6 @@ def fire_init(fuel: ArrayLike, ignite: ArrayLike, params: FireParams) -> FireSta
 _DIAGONAL = 1.0 / np.sqrt(2.0)
 
 
-def _neighbour_sum(values: FloatArray, diagonal_weight: float) -> FloatArray:
-    """Sum over each cell's eight neighbours, diagonal ones weighted (zero off the grid)."""
-    padded = np.pad(values, 1)
-    h, w = values.shape
-    edge = padded[:-2, 1:-1] + padded[2:, 1:-1] + padded[1:-1, :-2] + padded[1:-1, 2:]
-    diag = padded[:-2, :-2] + padded[:-2, 2:] + padded[2:, :-2] + padded[2:, 2:]
-    out: FloatArray = edge + diagonal_weight * diag
-    assert out.shape == (h, w)
-    return out
-
-
 def fire_step(
     fire: FireState,
     params: FireParams,
@@ -222,7 +212,7 @@ def fire_step(
         )
     burning = fire.state == BURNING
     # log of the probability that no burning neighbour ignites the cell this step
-    log_no = -rate0_hz * dt_s * _neighbour_sum(burning.astype(float), _DIAGONAL)
+    log_no = -rate0_hz * dt_s * neighbour_sum(burning.astype(float), _DIAGONAL)
     factor = 1.0 + np.clip(params.fuel_factor * (fire.fuel - 1.0), -0.9, 1.0)
     p_ignite = -np.expm1(log_no * factor)
     u = rng.random(fire.state.shape)
