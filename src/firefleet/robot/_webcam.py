@@ -137,7 +137,6 @@ class Webcams:
             first = self._grab()
             if first is None:
                 raise InputError(f"webcams {', '.join(sources)}: no frame could be read")
-            self._check_shape(first)
             self._held: WebcamFrame | None = first
         except BaseException:
             self.close()
@@ -155,49 +154,47 @@ class Webcams:
                 )
 
     def _grab(self) -> WebcamFrame | None:
-        """One capture from every camera (None: no frame; decode failures counted)."""
+        """One capture from every camera (None: no frame, counted in ``dropped``).
+
+        Raises InputError if a frame cannot be decoded or the cameras' sizes differ.
+        """
         index = self.captured
-        try:
-            if len(self._caps) == 2:
-                pairs = list(read_pairs(*self._caps, n_frames=1, devices=self._devices))  # type: ignore[arg-type]
-                if not pairs:
-                    self.dropped += 1
-                    return None
-                p = pairs[0]
-                frame = WebcamFrame(index, (p.t_left_s, p.t_right_s), (p.left, p.right))
-            else:
-                cap = self._caps[0]
-                with quiet_opencv():
-                    grabbed = cap.grab()
-                    t = time.monotonic() if self._devices[0] else cap.get(cv2.CAP_PROP_POS_MSEC)
-                    got, image = cap.retrieve() if grabbed else (False, None)
-                if not grabbed:
-                    self.dropped += 1
-                    return None
-                if not got or image is None:
-                    raise InputError(f"webcam {self.sources[0]}: a frame could not be decoded")
-                t_s = float(t) if self._devices[0] else float(t) / 1000.0
-                frame = WebcamFrame(index, (t_s,), (np.asarray(image),))
-        except InputError:  # undecodable frame, or the two cameras' sizes differ
-            self.failed += 1
-            return None
+        if len(self._caps) == 2:
+            pairs = list(read_pairs(*self._caps, n_frames=1, devices=self._devices))  # type: ignore[arg-type]
+            if not pairs:
+                self.dropped += 1
+                return None
+            p = pairs[0]
+            frame = WebcamFrame(index, (p.t_left_s, p.t_right_s), (p.left, p.right))
+        else:
+            cap = self._caps[0]
+            with quiet_opencv():
+                grabbed = cap.grab()
+                t = time.monotonic() if self._devices[0] else cap.get(cv2.CAP_PROP_POS_MSEC)
+                got, image = cap.retrieve() if grabbed else (False, None)
+            if not grabbed:
+                self.dropped += 1
+                return None
+            if not got or image is None:
+                raise InputError(f"webcam {self.sources[0]}: a frame could not be decoded")
+            t_s = float(t) if self._devices[0] else float(t) / 1000.0
+            frame = WebcamFrame(index, (t_s,), (np.asarray(image),))
+        self._check_shape(frame)
         self.captured += 1
         return frame
 
     def read(self) -> WebcamFrame | None:
-        """Capture now, in the caller's thread (None: nothing read, counted)."""
+        """Capture now, in the caller's thread (None: nothing read, counted in
+        ``dropped`` or ``failed``)."""
         held = self._held
         if held is not None:  # the frame read at open
             self._held = None
             return held
-        frame = self._grab()
-        if frame is not None:
-            try:
-                self._check_shape(frame)
-            except InputError:
-                self.failed += 1
-                return None
-        return frame
+        try:
+            return self._grab()
+        except InputError:  # undecodable, or not the configured size
+            self.failed += 1
+            return None
 
     def start(self) -> None:
         """Capture in a background thread at ``rate_hz``; :meth:`poll` takes the newest."""
