@@ -131,7 +131,7 @@ def _open_range_and_cameras(
     w = config.hardware.webcams
     if w.adapter == "none":
         return
-    sources = [w.left, w.right] if fake is False else [w.fake_left, w.fake_right]
+    sources = [w.fake_left, w.fake_right] if fake else [w.left, w.right]
     if sources[0] is None:
         return  # --fake without video files: no webcams
     cams = Webcams([s for s in sources if s is not None], width=w.width, height=w.height,

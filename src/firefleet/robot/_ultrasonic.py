@@ -222,6 +222,8 @@ class HcSr04:
 
     def close(self) -> None:
         """Stop the sampling thread and release the pins."""
+        if self._sensor.closed:
+            return
         # gpiozero's DistanceSensor.close drops the trigger before it stops the thread
         # that fires it (an AttributeError in that thread); stop the thread first
         self._sensor._queue.stop()
