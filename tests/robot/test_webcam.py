@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from firefleet.errors import InputError
+from firefleet.perception.stereo import StereoCalibration, calibration_yaml
 from firefleet.robot import Webcams, load_role, open_adapters, parse_robot_config, run_onboard
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -129,3 +130,45 @@ def test_firefleet_robot_fake_with_a_video_pair(pair: tuple[str, str], tmp_path:
     assert summary["webcam_captures"] >= 2
     assert summary["range_readings"] == 10
     assert summary["range_median_m"] == pytest.approx(0.7, rel=1e-9)  # the fake's air: 23.5 C
+
+
+def test_the_stereo_scan_measures_a_wall_at_its_depth(tmp_path: Path) -> None:
+    # an ideal rig (f 200 px, baseline 0.1 m) looking at a textured wall with 8 px of
+    # disparity: depth f B / d = 2.5 m
+    w, h, f, b, d = 320, 240, 200.0, 0.1, 8
+    k = np.array([[f, 0.0, (w - 1) / 2], [0.0, f, (h - 1) / 2], [0.0, 0.0, 1.0]])
+    calib = StereoCalibration(image_size=(w, h), k_left=k, dist_left=np.zeros(5), k_right=k,
+                              dist_right=np.zeros(5), rotation=np.eye(3),
+                              translation_m=np.array([-b, 0.0, 0.0]))  # fmt: skip
+    (tmp_path / "calib.yaml").write_text(calibration_yaml(calib))
+    rng = np.random.default_rng(0)
+    noise = rng.uniform(0, 255, (h, w + d, 3)).astype(np.float32)
+    wall = np.clip((cv2.GaussianBlur(noise, (0, 0), 1.0) - 128) * 3 + 128, 0, 255).astype(np.uint8)
+    paths = []
+    for name, x0 in (("l.avi", 0), ("r.avi", d)):
+        writer = cv2.VideoWriter(str(tmp_path / name), cv2.VideoWriter.fourcc(*"MJPG"), FPS, (w, h))
+        for _ in range(10):
+            writer.write(np.ascontiguousarray(wall[:, x0 : x0 + w]))
+        writer.release()
+        paths.append(str(tmp_path / name))
+    webcams = {"adapter": "v4l2", "width": w, "height": h, "rate_hz": 5.0,
+               "fake_left": paths[0], "fake_right": paths[1],
+               "calibration": str(tmp_path / "calib.yaml")}  # fmt: skip
+    config = parse_robot_config({
+        "scenario": "coop-different-paths", "robot": 0, "duration_s": 1.0,
+        "hardware": {"webcams": webcams},
+    })  # fmt: skip
+    with open_adapters(config, fake=True) as adapters:
+        result = run_onboard(config, load_role(config, Path(".")), adapters, stop=threading.Event())
+    nearest = [c["nearest_obstacle_m"] for c in result.webcam]
+    assert len(nearest) >= 2
+    np.testing.assert_allclose(nearest, f * b / d, rtol=0.02)
+    small = parse_robot_config({
+        "scenario": "coop-different-paths",
+        "hardware": {"webcams": {**webcams, "width": 640, "height": 480}},
+    })  # fmt: skip
+    with (
+        pytest.raises(InputError, match=r"calib\.yaml is for 320x240 px, the webcams give 640x480"),
+        open_adapters(small, fake=True),
+    ):
+        pass

@@ -96,7 +96,8 @@ class WebcamsConfig:
 
     ``fake_left``/``fake_right`` are the video files that stand in for the cameras with
     ``--fake`` (relative to the working directory); without them ``--fake`` runs with
-    no webcams.
+    no webcams. ``calibration``: the pair's stereo calibration (``firefleet stereo
+    calibrate``'s YAML); with it each pair becomes a range scan (nearest obstacle).
     """
 
     adapter: Literal["v4l2", "none"] = "none"
@@ -107,6 +108,7 @@ class WebcamsConfig:
     rate_hz: float = pydantic.Field(default=2.0, gt=0.0, le=30.0)
     fake_left: str | None = None
     fake_right: str | None = None
+    calibration: str | None = None
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)

@@ -23,6 +23,7 @@ commanded to zero and e-stopped, and the ports closed.
 from __future__ import annotations
 
 import contextlib
+import math
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -35,15 +36,16 @@ import numpy as np
 from firefleet.errors import InputError
 from firefleet.net.messages import Sensors
 from firefleet.net.robot import RobotController
+from firefleet.perception.stereo import load_calibration, process_pair
 from firefleet.perception.thermal import KELVIN, detect
 from firefleet.robot._arduino import ArduinoLink
-from firefleet.robot._config import RobotConfig
+from firefleet.robot._config import RobotConfig, WebcamsConfig
 from firefleet.robot._fake_board import FakeBoard
 from firefleet.robot._lepton import FakeLepton, Lepton
 from firefleet.robot._messages import EStop, Setpoint
 from firefleet.robot._pt100 import FakeMax31865, Pt100
 from firefleet.robot._ultrasonic import FakeHcSr04, HcSr04, speed_of_sound_m_s
-from firefleet.robot._webcam import Webcams
+from firefleet.robot._webcam import WebcamFrame, Webcams
 from firefleet.scenarios.registry import load_scenario
 from firefleet.scenarios.schema import Scenario
 
@@ -135,10 +137,32 @@ def _open_range_and_cameras(
     if sources[0] is None:
         return  # --fake without video files: no webcams
     cams = Webcams([s for s in sources if s is not None], width=w.width, height=w.height,
-                   rate_hz=w.rate_hz)  # fmt: skip
+                   rate_hz=w.rate_hz, process=_stereo_scan(w))  # fmt: skip
     stack.callback(cams.close)
     cams.start()
     adapters.webcams = cams
+
+
+def _stereo_scan(w: WebcamsConfig) -> Callable[[WebcamFrame], dict[str, Any]] | None:
+    """The stereo pipeline on a pair (in the webcams' thread), if calibrated."""
+    if w.calibration is None:
+        return None
+    if w.right is None:
+        raise InputError("hardware.webcams.calibration: a stereo scan needs a right camera")
+    calib = load_calibration(w.calibration)
+    if calib.image_size != (w.width, w.height):
+        raise InputError(
+            f"hardware.webcams.calibration: {w.calibration} is for "
+            f"{calib.image_size[0]}x{calib.image_size[1]} px, the webcams give "
+            f"{w.width}x{w.height} (hardware.webcams.width/height)"
+        )
+
+    def scan(frame: WebcamFrame) -> dict[str, Any]:
+        summary = process_pair(*frame.images, calib=calib).summary
+        keys = ("nearest_obstacle_m", "depth_median_m", "measured_pct")
+        return {k: summary.get(k) for k in keys}
+
+    return scan
 
 
 def _sample_range_and_cameras(
@@ -157,8 +181,13 @@ def _sample_range_and_cameras(
     if cams is not None:
         frame = cams.poll()
         if frame is not None:
-            result.webcam.append({"t_s": t_s, "index": frame.index,
-                                  "skew_s": frame.t_s[-1] - frame.t_s[0]})  # fmt: skip
+            nearest = (frame.scan or {}).get("nearest_obstacle_m")
+            result.webcam.append({
+                "t_s": t_s,
+                "index": frame.index,
+                "skew_s": frame.t_s[-1] - frame.t_s[0],
+                "nearest_obstacle_m": math.nan if nearest is None else float(nearest),
+            })  # fmt: skip
         result.webcam_dropped, result.webcam_failed = cams.dropped, cams.failed
 
 
@@ -214,7 +243,8 @@ class OnboardResult:
     range_m : list of tuple
         (time [s], HC-SR04 distance [m]: inf out of range, NaN no echo) per reading.
     webcam : list of dict
-        Per webcam capture taken by the loop: time, capture index, stereo skew [s].
+        Per webcam capture taken by the loop: time, capture index, stereo skew [s],
+        the stereo scan's nearest obstacle [m] (NaN without a calibration or a match).
     ultrasonic_no_echoes, webcam_dropped, webcam_failed : int
         The adapters' counters at the end.
     """

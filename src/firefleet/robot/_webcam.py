@@ -19,9 +19,12 @@ file, their frames are taken one per period.
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -47,11 +50,15 @@ class WebcamFrame:
         position in the file for a video file.
     images : tuple of ndarray of uint8, shape (H, W, 3)
         BGR frames, left first.
+    scan : dict or None
+        What the adapter's ``process`` made of the capture (the stereo scan's numbers),
+        None without one.
     """
 
     index: int
     t_s: tuple[float, ...]
     images: tuple[NDArray[np.uint8], ...]
+    scan: dict[str, Any] | None = None
 
     @property
     def pair(self) -> StereoFrame:
@@ -76,6 +83,10 @@ class Webcams:
         The frame size expected (and requested from cameras) [px].
     rate_hz : float
         Captures per second of the background thread (:meth:`start`).
+    process : callable, optional
+        Run by the background thread on each capture (e.g. the stereo pipeline); its
+        dict becomes the frame's ``scan``. Slower than ``1 / rate_hz``, it lowers the
+        rate, never the control loop's.
 
     Raises
     ------
@@ -109,6 +120,7 @@ class Webcams:
         width: int = 640,
         height: int = 480,
         rate_hz: float = 2.0,
+        process: Callable[[WebcamFrame], dict[str, Any]] | None = None,
     ) -> None:
         if len(sources) not in (1, 2):
             raise InputError(f"webcams: {len(sources)} sources, expected 1 or 2 (left, right)")
@@ -117,6 +129,7 @@ class Webcams:
         self.sources = tuple(sources)
         self.shape = (height, width, 3)
         self.rate_hz = rate_hz
+        self._process = process
         self.dropped = 0
         """Reads that gave no frame (camera gone, file ended)."""
         self.failed = 0
@@ -207,6 +220,8 @@ class Webcams:
         deadline = time.monotonic()
         while not self._stop.is_set():
             frame = self.read()
+            if frame is not None and self._process is not None:
+                frame = dataclasses.replace(frame, scan=self._process(frame))
             if frame is not None:
                 with self._lock:
                     self._latest = frame
