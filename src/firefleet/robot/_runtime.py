@@ -136,18 +136,21 @@ def _open_range_and_cameras(
     sources = [w.fake_left, w.fake_right] if fake else [w.left, w.right]
     if sources[0] is None:
         return  # --fake without video files: no webcams
-    cams = Webcams([s for s in sources if s is not None], width=w.width, height=w.height,
-                   rate_hz=w.rate_hz, process=_stereo_scan(w))  # fmt: skip
+    opened = [s for s in sources if s is not None]
+    cams = Webcams(opened, width=w.width, height=w.height, rate_hz=w.rate_hz,
+                   process=_stereo_scan(w, len(opened)))  # fmt: skip
     stack.callback(cams.close)
     cams.start()
     adapters.webcams = cams
 
 
-def _stereo_scan(w: WebcamsConfig) -> Callable[[WebcamFrame], dict[str, Any]] | None:
+def _stereo_scan(
+    w: WebcamsConfig, n_cameras: int
+) -> Callable[[WebcamFrame], dict[str, Any]] | None:
     """The stereo pipeline on a pair (in the webcams' thread), if calibrated."""
     if w.calibration is None:
         return None
-    if w.right is None:
+    if n_cameras != 2:
         raise InputError("hardware.webcams.calibration: a stereo scan needs a right camera")
     calib = load_calibration(w.calibration)
     if calib.image_size != (w.width, w.height):

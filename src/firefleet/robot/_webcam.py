@@ -221,7 +221,10 @@ class Webcams:
         while not self._stop.is_set():
             frame = self.read()
             if frame is not None and self._process is not None:
-                frame = dataclasses.replace(frame, scan=self._process(frame))
+                try:
+                    frame = dataclasses.replace(frame, scan=self._process(frame))
+                except (InputError, cv2.error):  # a pair the pipeline cannot take
+                    self.failed += 1
             if frame is not None:
                 with self._lock:
                     self._latest = frame
