@@ -36,6 +36,7 @@ __all__ = [
     "breakdown_delay_s",
     "formation_link_study",
     "formation_study_png",
+    "points",
     "study_scenario",
 ]
 
@@ -76,7 +77,7 @@ def study_scenario() -> Scenario:
     return dataclasses.replace(base, duration_s=20.0, poses=poses, command=command)
 
 
-def _points() -> list[tuple[str, float, LinkSpec]]:
+def points() -> list[tuple[str, float, LinkSpec]]:
     """(axis, value, link) of every point: loss, burst and delay, one at a time."""
     out = [("loss", v, LinkSpec(preset="xbee", loss=v)) for v in LOSSES]
     out += [
@@ -105,7 +106,7 @@ def formation_link_study(
     base = study_scenario()
     kind = task_kind("formation")
     rec = np.arange(0, base.n_steps + 1, 10)
-    runs = [(axis, value, spec, seed) for axis, value, spec in _points() for seed in seeds]
+    runs = [(axis, value, spec, seed) for axis, value, spec in points() for seed in seeds]
     total = len(runs) + 1
     out: list[dict[str, Any]] = []
     for done, (axis, value, spec, seed) in enumerate(runs):

@@ -23,14 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from firefleet.report.formation_link import (
-    breakdown_delay_s as formation_breakdown_delay_s,
-)
-from firefleet.report.formation_link import DELAYS_S as FORMATION_DELAYS_S
-from firefleet.report.formation_link import (
-    formation_link_study,
-    formation_study_png,
-)
+from firefleet.report import formation_link
 from firefleet.report.html import ReportRun
 from firefleet.scenarios import Claim, load_scenario
 from firefleet.scenarios._network import LinkSpec
@@ -210,10 +203,20 @@ def study_png(study: dict[str, Any]) -> bytes:
 
 
 def link_study_run(progress: Callable[[int, int], None] | None = None) -> ReportRun:
-    """The study as an entry of the report, with its claims."""
-    study = link_study(progress=progress)
-    formation = formation_link_study()
-    f_breakdown = formation_breakdown_delay_s(formation)
+    """The study as an entry of the report, with its claims (the path-following study,
+    then the formation's; ``progress`` counts the runs of both)."""
+    first = 2 * len(_points()) + 1  # the two default seeds, and the clock
+    total = first + 2 * len(formation_link.points()) + 1
+
+    def shifted(offset: int) -> Callable[[int, int], None] | None:
+        if progress is None:
+            return None
+        report = progress
+        return lambda done, _: report(offset + done, total)
+
+    study = link_study(progress=shifted(0))
+    formation = formation_link.formation_link_study(progress=shifted(first))
+    f_breakdown = formation_link.breakdown_delay_s(formation)
     f_loss = [p for p in formation["points"] if p["axis"] == "loss"]
     loss_pts = [p for p in study["points"] if p["axis"] in ("loss", "burst")]
     breakdown = breakdown_delay_s(study)
@@ -264,7 +267,7 @@ def link_study_run(progress: Callable[[int, int], None] | None = None) -> Report
     else:
         verdict = "Cooperation held at every latency swept"
     if math.isfinite(f_breakdown):
-        f_before = max((d for d in FORMATION_DELAYS_S if d < f_breakdown), default=0.0)
+        f_before = max((d for d in formation_link.DELAYS_S if d < f_breakdown), default=0.0)
         f_verdict = (
             f"the moving formation breaks down between {f_before * 1e3:g} and "
             f"{f_breakdown * 1e3:g} ms of latency (leaves 0.15 m or 2 degrees)"
@@ -281,10 +284,10 @@ def link_study_run(progress: Callable[[int, int], None] | None = None) -> Report
             f"NRF module.\" {verdict} (the spread first exceeds 0.5 s; the law's timeout "
             f"is 1 s); {f_verdict}."
         ),
-        command="python -c 'from firefleet.report.network import link_study; print(link_study())'",
+        command="python -c 'from firefleet.report.network import link_study_run; link_study_run()'",
         files={
             "link_study.png": study_png(study),
-            "formation_link_study.png": formation_study_png(formation),
+            "formation_link_study.png": formation_link.formation_study_png(formation),
         },
         figures=("link_study.png", "formation_link_study.png"),
         document=metrics_document("link-study", claims, metrics),

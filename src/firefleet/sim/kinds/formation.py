@@ -4,7 +4,8 @@ The run is :func:`firefleet.sim.formation.simulate_formation` (its own loop: a p
 mass's sub-stepped force law does not fit the world loop's wheel stages), its neighbours
 over the world loop's link stage when the scenario's ``link:`` is impaired
 (:mod:`firefleet.sim._formation_link`), its metrics
-:func:`firefleet.sim.formation.formation_metrics`, its figures :func:`firefleet.report.formation.formation_figures`.
+:func:`firefleet.sim.formation.formation_metrics`, its figures
+:func:`firefleet.report.formation.formation_figures`.
 """
 
 from __future__ import annotations
