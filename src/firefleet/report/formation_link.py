@@ -51,8 +51,9 @@ BOUNDS = {"radius_error_max_m": 0.15, "spacing_error_max_deg": 2.0}
 
 
 def study_scenario() -> Scenario:
-    """``formation-moving`` shortened to 20 s, the leader driving 7 m from 1 s on, the
-    robots started on the regular polygon (look-ahead points on the 3 m circle).
+    """``formation-moving`` shortened to 20 s, the leader driving a 4 m and a 3 m
+    segment from 1 s on (it turns its corner at 13 s), the robots started on the
+    regular polygon (look-ahead points on the 3 m circle).
 
     Examples
     --------
