@@ -223,6 +223,8 @@ def formation_study_png(study: dict[str, Any]) -> bytes:
             ax.set_ylim(BOUNDS[key] / 200.0, top * 1.5)
             if axis == "burst":
                 ax.set_xscale("log")
+                ax.set_xticks(xs, [f"{v:g}" for v in values])
+                ax.xaxis.set_minor_formatter(plt.NullFormatter())
             ax.set_xlabel(label)
             if col == 0:
                 ax.set_ylabel(ylabel)
