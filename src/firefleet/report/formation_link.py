@@ -186,6 +186,7 @@ def formation_study_png(study: dict[str, Any]) -> bytes:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     axes_spec = (
         ("loss", "independent loss [%]", 100.0),
@@ -224,7 +225,7 @@ def formation_study_png(study: dict[str, Any]) -> bytes:
             if axis == "burst":
                 ax.set_xscale("log")
                 ax.set_xticks(xs, [f"{v:g}" for v in values])
-                ax.xaxis.set_minor_formatter(plt.NullFormatter())
+                ax.xaxis.set_minor_formatter(NullFormatter())
             ax.set_xlabel(label)
             if col == 0:
                 ax.set_ylabel(ylabel)
