@@ -19,7 +19,9 @@ to the circle, the fresh neighbours) holds the robot on the circle by itself; th
 coordination law of path following drops stale robots for the same reason
 (:mod:`firefleet.control.coordination`).
 
-Each robot's own point is its own (true) one. The force on robot ``i`` is the law
+Each robot's own point is its own (true) one. A failed robot's radio goes on
+broadcasting its stopped point; which robots are in the team is known to all, as without
+the link (the kind's failure model). The force on robot ``i`` is the law
 evaluated on robot ``i``'s view of the team (:func:`view_forces`): N evaluations of
 :func:`firefleet.control.formation.formation_force_and_stiffness` a tick, one per
 receiver, each on that receiver's fresh neighbours.
