@@ -50,7 +50,6 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.formation import contact_pairs, formation_force_and_stiffness
@@ -58,6 +57,9 @@ from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
 from firefleet.models.mass_damper import MassDamperParams, mass_damper_step
 from firefleet.scenarios.schema import Formation, LeaderPath, Scenario
+from firefleet.sim._formation_link import Views, outbox, predicted_views, view_forces
+from firefleet.sim._formation_metrics import RADIUS_BAND, formation_metrics, spacing_error_deg
+from firefleet.sim._link_stage import link_impaired
 from firefleet.sim.drive import (
     DriveState,
     discretise_drive,
@@ -66,6 +68,7 @@ from firefleet.sim.drive import (
     encoder_phase,
     speed_control,
 )
+from firefleet.sim.link import LinkModel
 from firefleet.sim.result import SimResult
 
 __all__ = [
@@ -82,9 +85,8 @@ __all__ = [
 ]
 
 Progress = Callable[[int, int], None]
+Law = tuple[FloatArray, float]
 
-RADIUS_BAND = 0.05
-"""Band of ``radius_settling_time_s``: within 5 % of alpha (the issue's bound)."""
 
 _MAX_PLACEMENT_ROUNDS = 10_000
 
@@ -365,6 +367,18 @@ def simulate_formation(
     w_max = cmd.max_speed_m_s / scenario.robot.wheel_radius_m
     zero_load = np.zeros((n, 2))
 
+    # the neighbours over an impaired link (sim._formation_link); ideal: the true points
+    link = None
+    if link_impaired(scenario):
+        link = LinkModel.from_spec(scenario.link, seed=scenario.seed)
+    link_state = (link or LinkModel.from_spec(None)).init(n, dt)
+    timeout_s = link.params.timeout_s if link is not None else math.inf
+    sent: dict[str, FloatArray] = {}
+    last_point: FloatArray | None = None
+    inbox: dict[str, FloatArray] = {}
+    link_rec = {key: np.zeros((n_rec, n)) for key in ("message_age_max_s", "stale_robots")}
+    count_rec = {key: np.zeros(n_rec) for key in ("messages_sent", "messages_lost")}
+
     # the regular law's contact pairs: a Verlet list, rebuilt when a robot moved _SKIN_M / 2
     built_at: list[FloatArray] = []
     built_pairs: list[NDArray[np.intp]] = []
@@ -380,19 +394,28 @@ def simulate_formation(
         built_pairs[:] = [contact_pairs(point, 2.0 * body + reach + _SKIN_M)]
         return built_pairs[0]
 
-    def law(point: FloatArray, centre: FloatArray, active: BoolArray) -> tuple[FloatArray, float]:
+    def law(
+        point: FloatArray, centre: FloatArray, active: BoolArray, views: Views | None = None
+    ) -> tuple[FloatArray, float]:
         reach = contact_reach(int(active.sum()))
-        force, stiff = formation_force_and_stiffness(
-            point,
-            centre,
-            params,
-            law=cmd.law,
-            active=active,
-            obstacles=obstacles,
-            body_radius_m=body,
-            contact_range_m=reach,
-            pairs=candidates(point, reach),
-        )
+
+        def at(pos: FloatArray, act: BoolArray, pairs: NDArray[np.intp] | None) -> Law:
+            return formation_force_and_stiffness(
+                pos,
+                centre,
+                params,
+                law=cmd.law,
+                active=act,
+                obstacles=obstacles,
+                body_radius_m=body,
+                contact_range_m=reach,
+                pairs=pairs,
+            )
+
+        if views is None:
+            force, stiff = at(point, active, candidates(point, reach))
+        else:  # each robot's law on its own view of the team
+            force, stiff = view_forces(views, active, lambda pos, act, row: at(pos, act, None))
         if not np.isfinite(force).all():
             raise FormationDivergedError(
                 f"the formation force is not finite at t = {k * dt:.3f} s: the run "
@@ -418,7 +441,17 @@ def simulate_formation(
                 f"the leader, more than {DIVERGENCE_FACTOR:g} x (alpha_m + its farthest "
                 f"start + a body radius) = {far_m:.3g} m"
             )
-        force, stiff = law(point, leader[k], active)
+        views = None
+        if link is not None:
+            inbox, link_state = link.exchange(link_state, sent, k * dt, pose)
+            views = predicted_views(inbox, point, k, dt, timeout_s)
+            if diff_drive:  # the point's velocity, from its last tick
+                vel = np.zeros_like(point) if last_point is None else (point - last_point) / dt
+                last_point = point
+            else:
+                vel = state[:, 2:]
+            sent = outbox(point, vel)
+        force, stiff = law(point, leader[k], active, views)
         n_sub = 1
         if diff_drive:
             u = leader_v[k] + force / damping
@@ -441,6 +474,16 @@ def simulate_formation(
             rec_point[row] = point
             rec_active[row] = active
             rec_substeps[row] = n_sub
+            if views is not None:
+                assert link is not None
+                _, fresh, age = views
+                used = fresh & ~np.eye(n, dtype=bool)
+                oldest = np.where(used, age, -np.inf).max(axis=1)
+                link_rec["message_age_max_s"][row] = np.where(used.any(axis=1), oldest, np.nan)
+                link_rec["stale_robots"][row] = (~fresh).sum(axis=1)
+                counts = link.counters(link_state)
+                for key in count_rec:
+                    count_rec[key][row] = counts[key]
             if diff_drive:
                 assert drive is not None
                 for key, arr in (
@@ -466,7 +509,9 @@ def simulate_formation(
             for j in range(n_sub):
                 if j > 0:  # the force at the sub-step, the leader moved on linearly
                     centre = leader[k] + (j / n_sub) * (leader[k + 1] - leader[k])
-                    force, _ = law(state[:, :2], centre, active)
+                    if views is not None:
+                        views = predicted_views(inbox, state[:, :2], k, dt, timeout_s, j * h)
+                    force, _ = law(state[:, :2], centre, active, views)
                 force[active] += feed
                 state = mass_damper_step(state, force, h, md)
             if held is not None:  # a failed point mass is held where it stopped
@@ -494,93 +539,7 @@ def simulate_formation(
             "formation_xy_m": rec_point,
             "robot_active": rec_active,
             "substeps": rec_substeps,
+            **(link_rec if link is not None else {}),
+            **(count_rec if link is not None else {}),
         },
     )
-
-
-def spacing_error_deg(points: FloatArray, leader_xy: FloatArray) -> FloatArray:
-    """Largest deviation of the angular gaps between neighbours from 360 / N [deg].
-
-    Parameters
-    ----------
-    points : ndarray, shape (T, N, 2)
-        Formation points [m].
-    leader_xy : ndarray, shape (T, 2)
-        Leader [m].
-
-    Returns
-    -------
-    ndarray, shape (T,)
-        ``max_k |gap_k - 360 / N|`` where the gaps are the differences of the sorted
-        angles of the robots about the leader (wrapping around); 0 for one robot.
-    """
-    d = points - leader_xy[:, None, :]
-    ang = np.sort(np.degrees(np.arctan2(d[..., 1], d[..., 0])), axis=1)
-    n = ang.shape[1]
-    if n < 2:
-        return np.zeros(ang.shape[0])
-    gaps = np.diff(np.concatenate([ang, ang[:, :1] + 360.0], axis=1), axis=1)
-    return np.asarray(np.abs(gaps - 360.0 / n).max(axis=1), dtype=np.float64)
-
-
-def _min_clearance(result: SimResult, cmd: Formation) -> float:
-    """Smallest gap between two robot bodies or a body and an obstacle over the run [m]."""
-    centres = result.pose[:, :, :2]
-    n = centres.shape[1]
-    best = math.inf
-    radius = cmd.robot_radius_m
-    if n >= 2:
-        for xy in centres:
-            dist, _ = cKDTree(xy).query(xy, k=2)
-            best = min(best, float(dist[:, 1].min()) - 2.0 * radius)
-    for o in cmd.obstacles:
-        d = np.sqrt(((centres - np.array([o.x_m, o.y_m])) ** 2).sum(axis=2))
-        best = min(best, float(d.min()) - radius - o.radius_m)
-    return best
-
-
-def formation_metrics(result: SimResult) -> dict[str, float | list[float]]:
-    """The metrics of a formation run.
-
-    Shape metrics use the formation points of the robots in the team (a failed robot
-    drops out from its failure on) at the samples from ``formed_by_s`` on:
-
-    - ``radius_error_max_m``: largest ``| |p_k - c| - alpha |``;
-    - ``spacing_error_max_deg``: largest deviation from 360 / N of the angle between
-      neighbours about the leader (N the robots in the team at that sample);
-    - ``radius_settling_time_s``: time from the start until every robot in the team is
-      within 5 % of alpha of the circle for good (``inf`` if not by the end);
-    - ``final_radius_m``: each robot's distance from the leader at the end (a list,
-      robot 1 first);
-    - ``min_clearance_m``: over the whole run and every robot (failed ones too), the
-      smallest gap between two bodies (``|p_k - p_i| - 2 R``) or between a body and an
-      obstacle (``|p_k - o| - R - R_o``), from the robots' centres; > 0 means no
-      contact.
-    """
-    cmd = _command(result.scenario)
-    t = result.t
-    points = np.asarray(result.extra["formation_xy_m"])
-    leader = np.asarray(result.extra["leader_xy_m"])
-    active = np.asarray(result.extra["robot_active"]) > 0.5
-    r = np.sqrt(((points - leader[:, None, :]) ** 2).sum(axis=2))
-    err = np.where(active, np.abs(r - cmd.alpha_m), 0.0)
-    window = t >= cmd.formed_by_s - 1e-9
-    spacing = np.zeros(t.size)
-    for pattern in np.unique(active, axis=0):
-        rows = (active == pattern).all(axis=1)
-        spacing[rows] = spacing_error_deg(points[rows][:, pattern], leader[rows])
-    worst = err.max(axis=1)
-    outside = np.nonzero(worst > RADIUS_BAND * cmd.alpha_m)[0]
-    if outside.size == 0:
-        settle = 0.0
-    elif outside[-1] == t.size - 1:
-        settle = math.inf
-    else:
-        settle = float(t[outside[-1] + 1])
-    return {
-        "radius_error_max_m": float(worst[window].max()),
-        "spacing_error_max_deg": float(spacing[window].max()),
-        "min_clearance_m": _min_clearance(result, cmd),
-        "radius_settling_time_s": settle,
-        "final_radius_m": [float(v) for v in r[-1]],
-    }

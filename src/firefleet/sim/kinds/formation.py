@@ -1,8 +1,11 @@
 """Formation control (deliverable section 2.3): the team keeps a regular polygon around a leader.
 
-The run is :func:`firefleet.sim.formation.simulate_formation` (its own loop, not yet on
-:mod:`firefleet.sim.loop`), its metrics :func:`firefleet.sim.formation.formation_metrics`,
-its figures :func:`firefleet.report.formation.formation_figures`.
+The run is :func:`firefleet.sim.formation.simulate_formation` (its own loop: a point
+mass's sub-stepped force law does not fit the world loop's wheel stages), its neighbours
+over the world loop's link stage when the scenario's ``link:`` is impaired
+(:mod:`firefleet.sim._formation_link`), its metrics
+:func:`firefleet.sim.formation.formation_metrics`, its figures
+:func:`firefleet.report.formation.formation_figures`.
 """
 
 from __future__ import annotations
@@ -29,6 +32,9 @@ KINDS = (
             "min_clearance_m",
             "radius_settling_time_s",
             "final_radius_m",
+            "messages_sent",
+            "messages_lost",
+            "message_age_max_s",
         ),
         metrics=formation_metrics,
         figures=_figures,
