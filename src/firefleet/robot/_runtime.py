@@ -33,15 +33,18 @@ from typing import Any
 import numpy as np
 
 from firefleet.errors import InputError
-from firefleet.net.messages import Sensors
+from firefleet.net.messages import Sensors, TeamProgress
 from firefleet.net.robot import RobotController
+from firefleet.net.transport import open_session
 from firefleet.perception.thermal import KELVIN, detect
 from firefleet.robot._arduino import ArduinoLink
-from firefleet.robot._config import RobotConfig
+from firefleet.robot._config import LinkConfig, RobotConfig
 from firefleet.robot._fake_board import FakeBoard
 from firefleet.robot._lepton import FakeLepton, Lepton
 from firefleet.robot._messages import EStop, Setpoint
 from firefleet.robot._pt100 import FakeMax31865, Pt100
+from firefleet.robot._sim import SimMotors
+from firefleet.robot._teamlink import TeamLink
 from firefleet.scenarios.registry import load_scenario
 from firefleet.scenarios.schema import Scenario
 
@@ -50,12 +53,26 @@ __all__ = ["Adapters", "OnboardResult", "load_role", "open_adapters", "run_onboa
 
 @dataclass
 class Adapters:
-    """The devices the loop drives (None: not fitted)."""
+    """The devices the loop drives (None: not fitted).
 
-    motors: ArduinoLink
+    ``motors`` is the Arduino link (real or the fake board's), ``sim`` the plant over
+    zenoh instead (``--sim``: then ``motors`` is None); ``session`` is the zenoh
+    session of the team link (None: no team link)."""
+
+    motors: ArduinoLink | None
     thermal: Lepton | None = None
     pt100: Pt100 | None = None
     board: FakeBoard | None = None
+    sim: SimMotors | None = None
+    session: Any = None
+
+    @property
+    def link_errors(self) -> dict[str, int]:
+        """The motor link's error counters (the plant link's drops with ``--sim``)."""
+        if self.sim is not None:
+            return {"dropped": self.sim.crc_errors}
+        assert self.motors is not None
+        return {"crc_errors": self.motors.crc_errors, "framing_errors": self.motors.framing_errors}
 
 
 def _fake_scene(frames: int = 9) -> np.ndarray:
@@ -68,11 +85,32 @@ def _fake_scene(frames: int = 9) -> np.ndarray:
 
 
 @contextlib.contextmanager
-def open_adapters(config: RobotConfig, *, fake: bool) -> Iterator[Adapters]:
-    """Open the configured devices (``fake``: every device replaced by its fake), and
-    close them at the end, motors stopped first."""
+def open_adapters(
+    config: RobotConfig, *, fake: bool, sim: str | None = None, n_robots: int = 1,
+    dt_s: float = 0.01,
+) -> Iterator[Adapters]:  # fmt: skip
+    """Open the configured devices (``fake``: every device replaced by its fake; ``sim``:
+    the plant's endpoint, the motors and encoders are the plant's, over zenoh, and the
+    other devices are not fitted, the plant simulating none yet), and the team link's
+    session when the configuration has a link; close them at the end, motors stopped
+    first. ``n_robots`` and ``dt_s`` (the scenario's) are what ``sim`` says hello with."""
     hw = config.hardware
+    link = config.link
     with contextlib.ExitStack() as stack:
+        if sim is not None:
+            listen = link.listen if link is not None else "tcp/127.0.0.1:0"
+            run_id = int((link or LinkConfig()).run_id, 16)
+            session = open_session(listen=[listen], connect=[sim])
+            stack.callback(session.close)
+            plant = SimMotors(session, run_id, config.robot, n_robots, dt_s)
+            stack.callback(plant.close)
+            team = session if link is not None and link.team else None
+            yield Adapters(motors=None, sim=plant, session=team)
+            return
+        session = None
+        if link is not None and link.team:
+            session = open_session(listen=[link.listen], connect=list(link.connect))
+            stack.callback(session.close)
         board = None
         if fake or hw.motors.adapter == "fake":
             board = stack.enter_context(FakeBoard())
@@ -95,7 +133,7 @@ def open_adapters(config: RobotConfig, *, fake: bool) -> Iterator[Adapters]:
                 wires=hw.pt100.wires,
                 mains_hz=hw.pt100.mains_hz,
             )
-        yield Adapters(motors=motors, thermal=thermal, pt100=pt100, board=board)
+        yield Adapters(motors=motors, thermal=thermal, pt100=pt100, board=board, session=session)
 
 
 def _spi(bus: int, device: int, mode: int, hz: int, stack: contextlib.ExitStack) -> Any:
@@ -134,7 +172,8 @@ class OnboardResult:
     Attributes
     ----------
     stop_reason : str
-        ``duration``, ``arrived``, ``signal`` or ``overruns``.
+        ``duration``, ``arrived``, ``signal``, ``overruns``; with ``--sim`` also
+        ``plant stopped`` (the run's end) or ``plant lost`` (its process went).
     ticks, overruns, worst_overrun_streak : int
     period_s : list of float
         The measured period of every tick [s].
@@ -147,6 +186,9 @@ class OnboardResult:
         Per thermal frame: time, fires, people, hottest pixel [deg C].
     pt100_c : list of tuple
         (time [s], air temperature [deg C]) per reading.
+    team_link : dict or None
+        The team link's summary (:meth:`~firefleet.robot._teamlink.TeamLink.summary`:
+        lost-link e-stops, their times, counters); None without a link.
     """
 
     stop_reason: str = "duration"
@@ -162,6 +204,7 @@ class OnboardResult:
     pose: list[tuple[float, float, float]] = field(default_factory=list)
     thermal: list[dict[str, float]] = field(default_factory=list)
     pt100_c: list[tuple[float, float]] = field(default_factory=list)
+    team_link: dict[str, Any] | None = None
 
     def summary(self) -> dict[str, Any]:
         """The numbers a person reads: counts, period statistics, CPU share."""
@@ -177,6 +220,7 @@ class OnboardResult:
             "thermal_frames": len(self.thermal),
             "people_seen": int(sum(f["people"] for f in self.thermal)),
             "pt100_readings": len(self.pt100_c),
+            "team_link": self.team_link,
         }
 
 
@@ -193,6 +237,19 @@ def load_role(config: RobotConfig, folder: Path) -> Scenario:
     return scenario
 
 
+def _team_link(
+    config: RobotConfig, scenario: Scenario, adapters: Adapters, controller: RobotController
+) -> TeamLink | None:
+    link = config.link
+    if link is None or adapters.session is None:
+        return None
+    return TeamLink(
+        adapters.session, int(link.run_id, 16), config.robot, scenario.n_robots,
+        controller.layout.width, scenario.dt_s, timeout_s=link.timeout_s,
+        rearm_s=link.rearm_s, tick_ages=adapters.sim is not None,
+    )  # fmt: skip
+
+
 def run_onboard(
     config: RobotConfig,
     scenario: Scenario,
@@ -201,8 +258,26 @@ def run_onboard(
     stop: threading.Event,
     progress: Callable[[int, int], None] | None = None,
 ) -> OnboardResult:
-    """Run the on-board loop until the duration, arrival, a stop or an overrun streak."""
+    """Run the on-board loop until the duration, arrival, a stop or an overrun streak
+    (with ``--sim``: until the plant stops the run; arrival does not end it)."""
     controller = RobotController(scenario, config.robot)
+    team = _team_link(config, scenario, adapters, controller)
+    try:
+        return _loop(config, scenario, adapters, controller, team, stop, progress)
+    finally:
+        if team is not None:
+            team.close()
+
+
+def _loop(
+    config: RobotConfig,
+    scenario: Scenario,
+    adapters: Adapters,
+    controller: RobotController,
+    team: TeamLink | None,
+    stop: threading.Event,
+    progress: Callable[[int, int], None] | None,
+) -> OnboardResult:
     dt_s = scenario.dt_s
     duration_s = min(config.duration_s or scenario.duration_s, scenario.duration_s)
     n_steps = round(duration_s / dt_s)
@@ -211,72 +286,147 @@ def run_onboard(
     rad_per_count = 2.0 * np.pi / cpr
     thermal_every = max(1, round(1.0 / (config.hardware.thermal.rate_hz * dt_s)))
     pt100_every = max(1, round(1.0 / (config.hardware.pt100.rate_hz * dt_s)))
+    width = controller.layout.width
     result = OnboardResult()
     history: list[tuple[int, int]] = []
     streak = 0
     cpu0, wall0 = time.process_time(), time.monotonic()
     deadline = wall0 + dt_s
     last_start = wall0
-    motors = adapters.motors
-    motors.send(Setpoint(0.0, 0.0))
-    for tick in range(n_steps):
-        start = time.monotonic()
-        result.period_s.append(start - last_start)
-        last_start = start
-        if stop.is_set():
-            result.stop_reason = "signal"
-            break
-        motors.poll()
-        enc = motors.encoders
-        counts = (enc.right_counts, enc.left_counts) if enc is not None else (0, 0)
-        history = [*history[-2:], counts] if history else [counts] * 3
-        measured = (np.array(history[-1]) - np.array(history[0])) * rad_per_count / (2 * dt_s)
-        sensors = Sensors(
-            0, config.robot, tick, t_s=tick * dt_s,
-            counts=(float(counts[0]), float(counts[1])),
-            measured_rad_s=(float(measured[0]), float(measured[1])),
-        )  # fmt: skip
-        command, state = controller.step(sensors)
-        ref = np.clip(command.reference_rad_s, -top_rad_s, top_rad_s)
-        motors.send(Setpoint(float(ref[0]), float(ref[1])))
-        result.t_s.append(tick * dt_s)
-        result.counts.append(counts)
-        result.reference_rad_s.append((float(ref[0]), float(ref[1])))
-        result.pose.append(state.pose)
-        if adapters.thermal is not None and tick % thermal_every == 0:
-            frame = adapters.thermal.read_frame(max_windows=1)
-            if frame is not None:
-                frame_c = frame.astype(float) / 100.0 - KELVIN
-                found = detect(frame_c).detections
-                result.thermal.append({
-                    "t_s": tick * dt_s,
-                    "fires": sum(d.kind == "fire" for d in found),
-                    "people": sum(d.kind == "person" for d in found),
-                    "max_c": float(frame_c.max()),
-                })  # fmt: skip
-        if adapters.pt100 is not None and tick % pt100_every == 0:
-            result.pt100_c.append((tick * dt_s, adapters.pt100.read().temperature_c))
-        result.ticks = tick + 1
-        if progress is not None and tick % 100 == 0:
-            progress(tick, n_steps)
-        if state.arrived:
-            result.stop_reason = "arrived"
-            break
-        now = time.monotonic()
-        if now > deadline:
-            result.overruns += 1
-            streak += 1
-            result.worst_overrun_streak = max(result.worst_overrun_streak, streak)
-            if streak >= config.safety.overrun_streak:
-                result.stop_reason = "overruns"
+    motors, plant = adapters.motors, adapters.sim
+    row: tuple[float, ...] = ()
+    if motors is not None:
+        motors.send(Setpoint(0.0, 0.0))
+    tick = 0
+    try:
+        while True:
+            if plant is not None:  # the plant's sensors pace the loop
+                sensors = plant.next_sensors(stop)
+                if sensors is None:
+                    result.stop_reason = "signal" if stop.is_set() else plant.end or "signal"
+                    break
+                tick = sensors.tick
+                if config.duration_s is not None and sensors.t_s >= config.duration_s:
+                    result.stop_reason = "duration"  # the plant's run ends on its own
+                    break
+                start = time.monotonic()
+                if team is not None and tick > 0:  # the teammates' last broadcast
+                    team.wait_for(tick - 1, 0.5 * dt_s)
+            else:
+                if tick >= n_steps:
+                    break
+                start = time.monotonic()
+                if stop.is_set():
+                    result.stop_reason = "signal"
+                    break
+                assert motors is not None
+                motors.poll()
+                enc = motors.encoders
+                counts = (enc.right_counts, enc.left_counts) if enc is not None else (0, 0)
+                history = [*history[-2:], counts] if history else [counts] * 3
+                measured = (
+                    (np.array(history[-1]) - np.array(history[0])) * rad_per_count / (2 * dt_s)
+                )
+                sensors = Sensors(
+                    0, config.robot, tick, t_s=tick * dt_s,
+                    counts=(float(counts[0]), float(counts[1])),
+                    measured_rad_s=(float(measured[0]), float(measured[1])),
+                )  # fmt: skip
+            result.period_s.append(start - last_start)
+            last_start = start
+            if team is not None and (heard := team.progress(tick)) is not None:
+                heard = TeamProgress(
+                    heard.run_id, heard.robot, heard.tick, width=width,
+                    values=_own_row(heard.values, row, config.robot, width),
+                    age_s=heard.age_s, alive=heard.alive,
+                )  # fmt: skip
+                controller.hear_team(heard)
+            command, state = controller.step(sensors)
+            ref = np.clip(command.reference_rad_s, -top_rad_s, top_rad_s)
+            if team is not None:
+                row = tuple(command.series[len(command.series) - width :]) if width else ()
+                team.publish(tick, row)
+                if team.estopped():
+                    ref = np.zeros(2)
+            reference = (float(ref[0]), float(ref[1]))
+            if plant is not None:
+                plant.send(reference, command.series)
+            else:
+                assert motors is not None
+                motors.send(Setpoint(*reference))
+            result.t_s.append(sensors.t_s)
+            result.counts.append((int(sensors.counts[0]), int(sensors.counts[1])))
+            result.reference_rad_s.append(reference)
+            result.pose.append(state.pose)
+            _sense(adapters, result, tick, dt_s, thermal_every, pt100_every)
+            result.ticks += 1
+            if progress is not None and tick % 100 == 0:
+                progress(tick, n_steps)
+            if state.arrived and plant is None:
+                result.stop_reason = "arrived"
                 break
-            deadline = now + dt_s  # do not catch up: the next period starts now
-        else:
-            streak = 0
-            time.sleep(deadline - now)
-            deadline += dt_s
-    motors.send(Setpoint(0.0, 0.0))
-    motors.send(EStop())
+            now = time.monotonic()
+            # with the plant: late when the command missed the plant's tick
+            late = now > start + dt_s if plant is not None else now > deadline
+            if late:
+                result.overruns += 1
+                streak += 1
+                result.worst_overrun_streak = max(result.worst_overrun_streak, streak)
+                if streak >= config.safety.overrun_streak:
+                    result.stop_reason = "overruns"
+                    break
+                deadline = now + dt_s  # do not catch up: the next period starts now
+            else:
+                streak = 0
+                if plant is None:
+                    time.sleep(deadline - now)
+                    deadline += dt_s
+            if plant is None:
+                tick += 1
+    finally:
+        if plant is not None:
+            plant.send((0.0, 0.0), ())
+        if motors is not None:
+            motors.send(Setpoint(0.0, 0.0))
+            motors.send(EStop())
+        if team is not None:
+            team.publish(tick, row, alive=False)  # goodbye: not a lost link
+            result.team_link = team.summary()
     result.cpu_s = time.process_time() - cpu0
     result.wall_s = time.monotonic() - wall0
     return result
+
+
+def _own_row(
+    values: tuple[float, ...], row: tuple[float, ...], robot: int, width: int
+) -> tuple[float, ...]:
+    """The team's values with this robot's row its own last broadcast."""
+    if not row:
+        return values
+    out = list(values)
+    out[robot * width : (robot + 1) * width] = row
+    return tuple(out)
+
+
+def _sense(
+    adapters: Adapters,
+    result: OnboardResult,
+    tick: int,
+    dt_s: float,
+    thermal_every: int,
+    pt100_every: int,
+) -> None:
+    """The thermal camera and the PT100, each at its rate."""
+    if adapters.thermal is not None and tick % thermal_every == 0:
+        frame = adapters.thermal.read_frame(max_windows=1)
+        if frame is not None:
+            frame_c = frame.astype(float) / 100.0 - KELVIN
+            found = detect(frame_c).detections
+            result.thermal.append({
+                "t_s": tick * dt_s,
+                "fires": sum(d.kind == "fire" for d in found),
+                "people": sum(d.kind == "person" for d in found),
+                "max_c": float(frame_c.max()),
+            })  # fmt: skip
+    if adapters.pt100 is not None and tick % pt100_every == 0:
+        result.pt100_c.append((tick * dt_s, adapters.pt100.read().temperature_c))
