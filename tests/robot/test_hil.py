@@ -9,6 +9,7 @@ used.
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import socket
@@ -27,7 +28,7 @@ import yaml
 
 from firefleet import load_scenario
 from firefleet.cli._main import main
-from firefleet.net.messages import Command, decode
+from firefleet.net.messages import Command, TeamProgress, decode, encode
 from firefleet.net.transport import Keys, free_port, open_session
 from firefleet.robot._teamlink import Watchdog
 from firefleet.sim.metrics import compute_metrics
@@ -280,3 +281,72 @@ def test_hil_usage_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     bad.write_text(yaml.safe_dump({"scenario": "coop-different-paths", "link": {"timeout_s": 0}}))
     assert main(["robot", str(bad), "--fake"]) == 2
     assert "link.timeout_s" in capsys.readouterr().err
+
+
+def test_the_team_link_on_fakes_estops_when_teammates_stop_publishing(tmp_path: Path) -> None:
+    """``--fake`` with a team link: the robot publishes its progress each period and
+    hears its teammates' (here the test plays robots 2 and 3 at 100 Hz, reporting
+    themselves at the path's end so they hold no one back); when they stop publishing,
+    it e-stops between ``timeout_s`` after their last message and 0.25 s later (margin
+    as above), and commands zero from then on."""
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    config = {
+        "scenario": "coop-different-paths", "robot": 0, "duration_s": 4.0,
+        "link": {"timeout_s": TIMEOUT_S, "listen": endpoint},
+    }  # fmt: skip
+    (tmp_path / "robot.yaml").write_text(yaml.safe_dump(config))
+    robot = _firefleet(
+        "robot", str(tmp_path / "robot.yaml"), "--fake", "--out", str(tmp_path / "out"),
+        log=tmp_path / "robot.log",
+    )  # fmt: skip
+    try:
+        _wait_listening(port)
+        keys = Keys(RUN_ID)
+        heard: list[TeamProgress] = []
+        session = open_session(listen=["tcp/127.0.0.1:0"], connect=[endpoint])
+        try:
+
+            def on_progress(sample: Any) -> None:
+                message = decode(sample.payload.to_bytes(), run_id=RUN_ID, n_robots=3)
+                if isinstance(message, TeamProgress):
+                    heard.append(message)
+
+            sub = session.declare_subscriber(keys.team(0), on_progress)
+            pubs = [session.declare_publisher(keys.team(j)) for j in (1, 2)]
+            end = time.monotonic() + 60.0
+            while len(heard) < 20 and time.monotonic() < end:  # the robot is running
+                time.sleep(0.01)
+            for k in range(150):  # 1.5 s of teammates at 100 Hz
+                for j, pub in zip((1, 2), pubs, strict=True):
+                    values = [math.nan] * 6
+                    values[2 * j : 2 * j + 2] = [200.0, 0.0]
+                    ages = [math.inf] * 3
+                    ages[j] = 0.0
+                    pub.put(encode(TeamProgress(RUN_ID, j, k, width=2, values=tuple(values),
+                                                age_s=tuple(ages), alive=(True,) * 3)))  # fmt: skip
+                time.sleep(0.01)
+            last_s = time.monotonic()
+            assert robot.wait(timeout=30.0) == 0, (tmp_path / "robot.log").read_text()
+            sub.undeclare()
+        finally:
+            session.close()
+    finally:
+        if robot.poll() is None:
+            robot.kill()
+        robot.wait()
+    assert len(heard) >= 100
+    assert all(h.robot == 0 and h.width == 2 and math.isfinite(h.values[0]) for h in heard[:-1])
+    assert heard[-1].alive[0] is False  # its goodbye at the end
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    link = summary["team_link"]
+    assert link["received"]["TeamProgress"] >= 250
+    trips = link["estop_trips"]
+    # it may have tripped at the start (teammates not yet heard for timeout_s) and been
+    # released; the last trip is the one the silence caused
+    assert trips[-1]["silent"] == [2, 3]
+    latency_s = trips[-1]["t_monotonic_s"] - last_s
+    assert TIMEOUT_S - 0.02 <= latency_s <= TIMEOUT_S + 0.25, latency_s
+    log = np.load(tmp_path / "out" / "log.npz")
+    stopped = log["t"] > log["t"][-1] - 0.5
+    assert np.all(log["reference_rad_s"][stopped] == 0.0)
