@@ -30,6 +30,7 @@ from firefleet import load_scenario
 from firefleet.cli._main import main
 from firefleet.net.messages import Command, TeamProgress, decode, encode
 from firefleet.net.transport import Keys, free_port, open_session
+from firefleet.robot import load_role, read_robot_config
 from firefleet.robot._teamlink import Watchdog
 from firefleet.sim.metrics import compute_metrics
 from firefleet.sim.registry import task_kind
@@ -277,6 +278,13 @@ def test_hil_usage_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     assert "--run-id" in capsys.readouterr().err
     assert main(["robot", str(tmp_path / "robot-0.yaml"), "--sim", "tcp/10.0.0.1:7447"]) == 2
     assert "--sim" in capsys.readouterr().err
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    for i in range(3):
+        config, folder = read_robot_config(examples / f"robot-sim-{i}.yaml")
+        assert config.robot == i
+        assert config.link is not None
+        assert config.link.run_id == f"{RUN_ID:016x}"
+        assert load_role(config, folder).name == "coop-different-paths"
     bad = tmp_path / "bad.yaml"
     bad.write_text(yaml.safe_dump({"scenario": "coop-different-paths", "link": {"timeout_s": 0}}))
     assert main(["robot", str(bad), "--fake"]) == 2

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import pickle
 import secrets
@@ -170,6 +171,7 @@ class _Exchange:
         self.late = 0
         self.tick = 0
         self.stopping = False
+        self.dt_s = math.nan  # the scenario's tick [s]: a hello with another is refused
 
     def on_sample(self, sample: Any) -> None:
         data = sample.payload.to_bytes()
@@ -180,8 +182,8 @@ class _Exchange:
             if msg is None or msg.robot == PLANT:
                 return
             if isinstance(msg, Hello):
-                if msg.n_robots != self.run.n_robots:
-                    self.run.counters.dropped["team size"] += 1
+                if msg.n_robots != self.run.n_robots or msg.dt_s != self.dt_s:
+                    self.run.counters.dropped["mismatch"] += 1  # another scenario's robot
                     return
                 self.hello.add(msg.robot)
             elif isinstance(msg, Command):
@@ -321,6 +323,7 @@ def run_team(
     )
     keys = Keys(run.run_id)
     ex = _Exchange(run)
+    ex.dt_s = scenario.dt_s
     endpoint = listen if listen is not None else f"tcp/127.0.0.1:{free_port()}"
     session = open_session(listen=[endpoint], connect=[])
     procs: list[subprocess.Popen[bytes]] = []
@@ -348,6 +351,12 @@ def run_team(
                             f"{[i + 1 for i in missing]} of {n} did not join at {endpoint} "
                             f"(run id {run.run_id:016x}); start each with `firefleet robot "
                             f"CONFIG --sim {endpoint}`, its config's link.run_id the same"
+                            + (
+                                f"; {run.counters.dropped['mismatch']} hellos refused (team "
+                                f"size or tick not the scenario's: {n} robots, {ex.dt_s} s)"
+                                if run.counters.dropped["mismatch"]
+                                else ""
+                            )
                         )
                     gone = [i for i, p in enumerate(procs) if p.poll() is not None]
                     if gone or time.monotonic() - t_start > wait_s:

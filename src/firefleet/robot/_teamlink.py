@@ -193,6 +193,8 @@ class TeamLink:
     def publish(self, tick: int, row: tuple[float, ...], *, alive: bool = True) -> None:
         """This robot's broadcast of ``tick`` (``alive`` False: its goodbye)."""
         i = self.robot
+        if len(row) != self.width:  # nothing decided yet
+            row = (math.nan,) * self.width
         values = [math.nan] * (self.n * self.width)
         values[i * self.width : (i + 1) * self.width] = row
         ages = [math.inf] * self.n
