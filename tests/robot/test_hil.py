@@ -15,6 +15,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from importlib import resources
@@ -358,3 +359,63 @@ def test_the_team_link_on_fakes_estops_when_teammates_stop_publishing(tmp_path: 
     log = np.load(tmp_path / "out" / "log.npz")
     stopped = log["t"] > log["t"][-1] - 0.5
     assert np.all(log["reference_rad_s"][stopped] == 0.0)
+
+
+def test_an_overrun_streak_in_sim_stops_the_robot_with_a_zero_command(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``--sim`` in process against a test plant that sends sensors every 10 ms: a
+    controller slowed to 15 ms a period overruns every period, and ``overrun_streak``
+    (3) of them in a row end the loop (``overruns``) with a zero command sent last."""
+    from firefleet.net.messages import Sensors
+    from firefleet.net.robot import RobotController
+    from firefleet.robot import open_adapters, parse_robot_config, run_onboard
+
+    slow = RobotController.step
+
+    def step(self: RobotController, sensors: Sensors) -> Any:
+        time.sleep(0.015)
+        return slow(self, sensors)
+
+    monkeypatch.setattr(RobotController, "step", step)
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    config = parse_robot_config(
+        {"scenario": "coop-different-paths", "robot": 1, "safety": {"overrun_streak": 3}}
+    )
+    scenario = load_scenario("coop-different-paths")
+    keys = Keys(RUN_ID)
+    seen: list[Command] = []
+    plant = open_session(listen=[endpoint], connect=[])
+    try:
+
+        def on_command(sample: Any) -> None:
+            message = decode(sample.payload.to_bytes(), run_id=RUN_ID, n_robots=3)
+            if isinstance(message, Command):
+                seen.append(message)
+
+        sub = plant.declare_subscriber(keys.command(1), on_command)
+        done: list[Any] = []
+        with open_adapters(config, fake=False, sim=endpoint, n_robots=3, dt_s=0.01) as adapters:
+            stop = threading.Event()
+            worker = threading.Thread(
+                target=lambda: done.append(run_onboard(config, scenario, adapters, stop=stop))
+            )
+            worker.start()
+            for k in range(300):
+                if done:
+                    break
+                sensors = Sensors(RUN_ID, 1, k, t_s=k * 0.01, counts=(0.0, 0.0),
+                                  measured_rad_s=(0.0, 0.0))  # fmt: skip
+                plant.put(keys.sensors(1), encode(sensors))
+                time.sleep(0.01)
+            stop.set()
+            worker.join(timeout=10.0)
+        time.sleep(0.2)
+        sub.undeclare()
+    finally:
+        plant.close()
+    result = done[0]
+    assert result.stop_reason == "overruns"
+    assert result.worst_overrun_streak == 3
+    assert seen[-1].reference_rad_s == (0.0, 0.0)
+    assert any(c.reference_rad_s != (0.0, 0.0) for c in seen[:-1])

@@ -12,6 +12,14 @@ Each control period (the scenario's, 10 ms) on a monotonic clock:
 4. every ``1 / rate_hz``: a thermal frame through :func:`firefleet.perception.thermal.detect`
    (fires, people) and a PT100 reading.
 
+With ``--sim`` (:mod:`firefleet.robot._sim`) the motor board is the simulator's plant
+over zenoh: the counts of step 1 are the plant's ``Sensors`` of the tick, whose
+arrival starts the period, and the references of step 3 go to it as a ``Command``.
+With a ``link`` in the configuration, every period also publishes the robot's progress
+to its teammates and hears theirs (:mod:`firefleet.robot._teamlink`), the
+coordination's inbox; a teammate silent for ``link.timeout_s`` trips the lost-link
+e-stop (zero references, latched until the link is back for ``link.rearm_s``).
+
 A period that ends after its deadline is an *overrun*: the loop does not try to catch
 up (the next period starts now), counts it, and after ``overrun_streak`` overruns in a
 row e-stops the motors and ends (exit 1): a controller that cannot keep its period
