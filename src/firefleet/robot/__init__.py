@@ -1,5 +1,6 @@
 """On the robot: the serial link to the Arduino motor controller, and a fake board on a
-pseudo-terminal that runs the sketch's logic on simulated motors.
+pseudo-terminal that runs the sketch's logic on simulated motors; the Lepton, the PT100,
+the HC-SR04 ultrasonic range finder and the webcams, each with its fake.
 
 The bytes on the wire are described once, in ``firmware/arduino/PROTOCOL.md``.
 """
@@ -40,6 +41,8 @@ from firefleet.robot._runtime import (
     open_adapters,
     run_onboard,
 )
+from firefleet.robot._ultrasonic import FakeHcSr04, HcSr04, RangeReading, speed_of_sound_m_s
+from firefleet.robot._webcam import WebcamFrame, Webcams
 
 __all__ = [
     "LENGTHS",
@@ -52,11 +55,13 @@ __all__ = [
     "EStopClear",
     "Encoders",
     "FakeBoard",
+    "FakeHcSr04",
     "FakeLepton",
     "FakeMax31865",
     "Frame",
     "FrameDecoder",
     "HardwareConfig",
+    "HcSr04",
     "Lepton",
     "LinuxI2c",
     "Message",
@@ -64,9 +69,12 @@ __all__ = [
     "Pt100",
     "Pt100Reading",
     "Pwm",
+    "RangeReading",
     "RobotConfig",
     "Setpoint",
     "Status",
+    "WebcamFrame",
+    "Webcams",
     "crc16",
     "cvd_resistance_ohm",
     "cvd_temperature_c",
@@ -77,5 +85,6 @@ __all__ = [
     "parse_robot_config",
     "read_robot_config",
     "run_onboard",
+    "speed_of_sound_m_s",
     "unpack",
 ]

@@ -11,6 +11,8 @@ A YAML file (``examples/robot-fake.yaml`` runs on any machine with ``--fake``)::
       motors: {adapter: arduino, port: /dev/ttyACM0}        # or {adapter: fake}
       thermal: {adapter: lepton, spi_bus: 0, spi_device: 0, i2c_bus: 1, rate_hz: 9.0}
       pt100: {adapter: max31865, spi_bus: 0, spi_device: 1, wires: 3, rate_hz: 1.0}
+      ultrasonic: {adapter: hcsr04, trigger_gpio: 23, echo_gpio: 24, max_distance_m: 4.0}
+      webcams: {adapter: v4l2, left: /dev/video0, right: /dev/video2, rate_hz: 2.0}
     safety:
       overrun_streak: 10             # this many late periods in a row: e-stop, exit 1
     link:                            # the team link (absent: the robot runs alone)
@@ -77,12 +79,54 @@ class Pt100Config:
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class UltrasonicConfig:
+    """The range finder: an HC-SR04 on two GPIO pins (BCM numbers), ``fake``, or ``none``.
+
+    ``fake_distance_m`` is the wall the fake sees (``--fake``), in air at the fake
+    PT100's temperature.
+    """
+
+    adapter: Literal["hcsr04", "fake", "none"] = "none"
+    trigger_gpio: int = pydantic.Field(default=23, ge=2, le=27)
+    echo_gpio: int = pydantic.Field(default=24, ge=2, le=27)
+    max_distance_m: float = pydantic.Field(default=4.0, gt=0.0, le=4.0)
+    shots: int = pydantic.Field(default=5, ge=1, le=50)
+    air_temperature_c: float = pydantic.Field(default=20.0, ge=-40.0, le=85.0)
+    rate_hz: float = pydantic.Field(default=10.0, gt=0.0, le=100.0)
+    fake_distance_m: float = pydantic.Field(default=1.5, gt=0.0)
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class WebcamsConfig:
+    """The webcams (``left`` and, for stereo, ``right``: ``/dev/videoN`` or a video file)
+    through OpenCV's V4L2 capture, or ``none``.
+
+    ``fake_left``/``fake_right`` are the video files that stand in for the cameras with
+    ``--fake`` (relative to the working directory); without them ``--fake`` runs with
+    no webcams. ``calibration``: the pair's stereo calibration (``firefleet stereo
+    calibrate``'s YAML); with it each pair becomes a range scan (nearest obstacle).
+    """
+
+    adapter: Literal["v4l2", "none"] = "none"
+    left: str = "/dev/video0"
+    right: str | None = "/dev/video2"
+    width: int = pydantic.Field(default=640, gt=0)
+    height: int = pydantic.Field(default=480, gt=0)
+    rate_hz: float = pydantic.Field(default=2.0, gt=0.0, le=30.0)
+    fake_left: str | None = None
+    fake_right: str | None = None
+    calibration: str | None = None
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class HardwareConfig:
     """Each device's adapter."""
 
     motors: MotorsConfig = field(default_factory=MotorsConfig)
     thermal: ThermalConfig = field(default_factory=ThermalConfig)
     pt100: Pt100Config = field(default_factory=Pt100Config)
+    ultrasonic: UltrasonicConfig = field(default_factory=UltrasonicConfig)
+    webcams: WebcamsConfig = field(default_factory=WebcamsConfig)
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)

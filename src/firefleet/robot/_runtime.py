@@ -31,6 +31,7 @@ commanded to zero and e-stopped, and the ports closed.
 from __future__ import annotations
 
 import contextlib
+import math
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -44,15 +45,18 @@ from firefleet.errors import InputError
 from firefleet.net.messages import Sensors, TeamProgress
 from firefleet.net.robot import RobotController
 from firefleet.net.transport import open_session
+from firefleet.perception.stereo import load_calibration, process_pair
 from firefleet.perception.thermal import KELVIN, detect
 from firefleet.robot._arduino import ArduinoLink
-from firefleet.robot._config import LinkConfig, RobotConfig
+from firefleet.robot._config import LinkConfig, RobotConfig, WebcamsConfig
 from firefleet.robot._fake_board import FakeBoard
 from firefleet.robot._lepton import FakeLepton, Lepton
 from firefleet.robot._messages import EStop, Setpoint
 from firefleet.robot._pt100 import FakeMax31865, Pt100
 from firefleet.robot._sim import SimMotors
 from firefleet.robot._teamlink import TeamLink
+from firefleet.robot._ultrasonic import FakeHcSr04, HcSr04, speed_of_sound_m_s
+from firefleet.robot._webcam import WebcamFrame, Webcams
 from firefleet.scenarios.registry import load_scenario
 from firefleet.scenarios.schema import Scenario
 
@@ -73,6 +77,8 @@ class Adapters:
     board: FakeBoard | None = None
     sim: SimMotors | None = None
     session: Any = None
+    ultrasonic: HcSr04 | None = None
+    webcams: Webcams | None = None
 
     @property
     def link_errors(self) -> dict[str, int]:
@@ -134,14 +140,106 @@ def open_adapters(
             thermal = _real_lepton(config, stack)
         pt100 = None
         if hw.pt100.adapter == "fake" or (fake and hw.pt100.adapter != "none"):
-            pt100 = Pt100(FakeMax31865(temperature_c=23.5), wires=hw.pt100.wires)
+            pt100 = Pt100(FakeMax31865(temperature_c=_FAKE_AIR_C), wires=hw.pt100.wires)
         elif hw.pt100.adapter == "max31865":
             pt100 = Pt100(
                 _spi(hw.pt100.spi_bus, hw.pt100.spi_device, 1, 1_000_000, stack),
                 wires=hw.pt100.wires,
                 mains_hz=hw.pt100.mains_hz,
             )
-        yield Adapters(motors=motors, thermal=thermal, pt100=pt100, board=board, session=session)
+        adapters = Adapters(
+            motors=motors, thermal=thermal, pt100=pt100, board=board, session=session
+        )
+        _open_range_and_cameras(adapters, config, fake=fake, stack=stack)
+        yield adapters
+
+
+_FAKE_AIR_C = 23.5
+"""The fake PT100's air temperature [deg C], also the fake HC-SR04's air."""
+
+
+def _open_range_and_cameras(
+    adapters: Adapters, config: RobotConfig, *, fake: bool, stack: contextlib.ExitStack
+) -> None:
+    """Open the HC-SR04 and the webcams into ``adapters`` (their fakes with ``fake``)."""
+    u = config.hardware.ultrasonic
+    pin_factory = None
+    if u.adapter == "fake" or (fake and u.adapter != "none"):
+        echo_s = 2.0 * u.fake_distance_m / speed_of_sound_m_s(_FAKE_AIR_C)
+        pin_factory = FakeHcSr04(u.trigger_gpio, u.echo_gpio, echo_s=lambda _: echo_s).factory
+    if u.adapter != "none":
+        adapters.ultrasonic = stack.enter_context(
+            HcSr04(
+                u.trigger_gpio,
+                u.echo_gpio,
+                max_distance_m=u.max_distance_m,
+                shots=u.shots,
+                air_temperature_c=u.air_temperature_c,
+                pin_factory=pin_factory,
+            )
+        )
+    w = config.hardware.webcams
+    if w.adapter == "none":
+        return
+    sources = [w.fake_left, w.fake_right] if fake else [w.left, w.right]
+    if sources[0] is None:
+        return  # --fake without video files: no webcams
+    opened = [s for s in sources if s is not None]
+    cams = Webcams(opened, width=w.width, height=w.height, rate_hz=w.rate_hz,
+                   process=_stereo_scan(w, len(opened)))  # fmt: skip
+    stack.callback(cams.close)
+    cams.start()
+    adapters.webcams = cams
+
+
+def _stereo_scan(
+    w: WebcamsConfig, n_cameras: int
+) -> Callable[[WebcamFrame], dict[str, Any]] | None:
+    """The stereo pipeline on a pair (in the webcams' thread), if calibrated."""
+    if w.calibration is None:
+        return None
+    if n_cameras != 2:
+        raise InputError("hardware.webcams.calibration: a stereo scan needs a right camera")
+    calib = load_calibration(w.calibration)
+    if calib.image_size != (w.width, w.height):
+        raise InputError(
+            f"hardware.webcams.calibration: {w.calibration} is for "
+            f"{calib.image_size[0]}x{calib.image_size[1]} px, the webcams give "
+            f"{w.width}x{w.height} (hardware.webcams.width/height)"
+        )
+
+    def scan(frame: WebcamFrame) -> dict[str, Any]:
+        summary = process_pair(*frame.images, calib=calib).summary
+        keys = ("nearest_obstacle_m", "depth_median_m", "measured_pct")
+        return {k: summary.get(k) for k in keys}
+
+    return scan
+
+
+def _sample_range_and_cameras(
+    adapters: Adapters, result: OnboardResult, tick: int, dt_s: float, range_every: int
+) -> None:
+    """This period's HC-SR04 reading (at the PT100's air temperature) and newest webcam
+    capture, into the log."""
+    t_s = tick * dt_s
+    sonar = adapters.ultrasonic
+    if sonar is not None and tick % range_every == 0:
+        if result.pt100_c:
+            sonar.set_air_temperature(result.pt100_c[-1][1])
+        result.range_m.append((t_s, sonar.read().distance_m))
+        result.ultrasonic_no_echoes = sonar.no_echoes
+    cams = adapters.webcams
+    if cams is not None:
+        frame = cams.poll()
+        if frame is not None:
+            nearest = (frame.scan or {}).get("nearest_obstacle_m")
+            result.webcam.append({
+                "t_s": t_s,
+                "index": frame.index,
+                "skew_s": frame.t_s[-1] - frame.t_s[0],
+                "nearest_obstacle_m": math.nan if nearest is None else float(nearest),
+            })  # fmt: skip
+        result.webcam_dropped, result.webcam_failed = cams.dropped, cams.failed
 
 
 def _spi(bus: int, device: int, mode: int, hz: int, stack: contextlib.ExitStack) -> Any:
@@ -194,6 +292,13 @@ class OnboardResult:
         Per thermal frame: time, fires, people, hottest pixel [deg C].
     pt100_c : list of tuple
         (time [s], air temperature [deg C]) per reading.
+    range_m : list of tuple
+        (time [s], HC-SR04 distance [m]: inf out of range, NaN no echo) per reading.
+    webcam : list of dict
+        Per webcam capture taken by the loop: time, capture index, stereo skew [s],
+        the stereo scan's nearest obstacle [m] (NaN without a calibration or a match).
+    ultrasonic_no_echoes, webcam_dropped, webcam_failed : int
+        The adapters' counters at the end.
     team_link : dict or None
         The team link's summary (:meth:`~firefleet.robot._teamlink.TeamLink.summary`:
         lost-link e-stops, their times, counters); None without a link.
@@ -212,6 +317,11 @@ class OnboardResult:
     pose: list[tuple[float, float, float]] = field(default_factory=list)
     thermal: list[dict[str, float]] = field(default_factory=list)
     pt100_c: list[tuple[float, float]] = field(default_factory=list)
+    range_m: list[tuple[float, float]] = field(default_factory=list)
+    webcam: list[dict[str, float]] = field(default_factory=list)
+    ultrasonic_no_echoes: int = 0
+    webcam_dropped: int = 0
+    webcam_failed: int = 0
     team_link: dict[str, Any] | None = None
 
     def summary(self) -> dict[str, Any]:
@@ -228,7 +338,22 @@ class OnboardResult:
             "thermal_frames": len(self.thermal),
             "people_seen": int(sum(f["people"] for f in self.thermal)),
             "pt100_readings": len(self.pt100_c),
+            **self._range_and_camera_summary(),
             "team_link": self.team_link,
+        }
+
+    def _range_and_camera_summary(self) -> dict[str, Any]:
+        ranges = np.array([d for _, d in self.range_m])
+        seen = ranges[np.isfinite(ranges)]
+        return {
+            "range_readings": len(ranges),
+            "range_median_m": float(np.median(seen)) if len(seen) else None,
+            "range_out_of_range": int(np.isposinf(ranges).sum()),
+            "range_no_echo": int(np.isnan(ranges).sum()),
+            "ultrasonic_no_echoes": self.ultrasonic_no_echoes,
+            "webcam_captures": len(self.webcam),
+            "webcam_dropped": self.webcam_dropped,
+            "webcam_failed": self.webcam_failed,
         }
 
 
@@ -294,6 +419,7 @@ def _loop(
     rad_per_count = 2.0 * np.pi / cpr
     thermal_every = max(1, round(1.0 / (config.hardware.thermal.rate_hz * dt_s)))
     pt100_every = max(1, round(1.0 / (config.hardware.pt100.rate_hz * dt_s)))
+    range_every = max(1, round(1.0 / (config.hardware.ultrasonic.rate_hz * dt_s)))
     width = controller.layout.width
     result = OnboardResult()
     history: list[tuple[int, int]] = []
@@ -367,6 +493,7 @@ def _loop(
             result.reference_rad_s.append(reference)
             result.pose.append(state.pose)
             _sense(adapters, result, tick, dt_s, thermal_every, pt100_every)
+            _sample_range_and_cameras(adapters, result, tick, dt_s, range_every)
             result.ticks += 1
             if progress is not None and tick % 100 == 0:
                 progress(tick, n_steps)
