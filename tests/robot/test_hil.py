@@ -61,7 +61,7 @@ def no_stray_processes() -> Iterator[None]:
     assert not stray, f"processes left running: {[p.pid for p in stray]}"
 
 
-def _short_experiment_1(folder: Path, duration_s: float) -> Path:
+def _short_experiment_1(folder: Path, duration_s: float, listen: tuple[str, ...] = ()) -> Path:
     """Experiment 1 (coop-different-paths) on the first eighth of each path (less for a
     ``duration_s`` under 9.25 s), in as much less time (the same speeds): at 11 s, the
     robots arrive at about 10.4 s. Its claims: the arrival spread (<= 0.2 s, issue 19's
@@ -83,7 +83,10 @@ def _short_experiment_1(folder: Path, duration_s: float) -> Path:
     out = folder / "coop-short.yaml"
     out.write_text(yaml.safe_dump(data))
     for i in range(3):
-        config = {"scenario": out.name, "robot": i, "link": {"timeout_s": TIMEOUT_S}}
+        link: dict[str, Any] = {"timeout_s": TIMEOUT_S}
+        if listen:  # a fixed endpoint of its own (that a test can connect to)
+            link["listen"] = listen[i]
+        config = {"scenario": out.name, "robot": i, "link": link}
         (folder / f"robot-{i}.yaml").write_text(yaml.safe_dump(config))
     return out
 
@@ -199,12 +202,14 @@ def test_a_lost_teammate_estops_the_others_and_sigterm_stops_cleanly(
     between ``timeout_s`` after its last message (at most a tick before the kill) and
     ``timeout_s`` + 0.25 s after the kill (a tick, plus scheduling on two shared cores),
     and commands zero from then on, latched to the end."""
-    scenario = _short_experiment_1(tmp_path, duration_s=6.0)
+    own = tuple(f"tcp/127.0.0.1:{free_port()}" for _ in range(3))
+    scenario = _short_experiment_1(tmp_path, duration_s=6.0, listen=own)
     team = _Team(tmp_path, scenario)
     team_factory.append(team)
     keys = Keys(RUN_ID)
     seen: list[Command] = []
-    session = open_session(listen=["tcp/127.0.0.1:0"], connect=[team.endpoint])
+    _wait_listening(int(own[0].rsplit(":", 1)[1]))
+    session = open_session(listen=["tcp/127.0.0.1:0"], connect=[team.endpoint, own[0]])
     try:
 
         def on_command(sample: Any) -> None:
