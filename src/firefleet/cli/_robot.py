@@ -1,4 +1,5 @@
-"""``firefleet robot CONFIG.yaml [--fake]``: the on-board loop on a robot's hardware."""
+"""``firefleet robot CONFIG.yaml [--fake | --sim ENDPOINT]``: the on-board loop on a robot's
+hardware (or its fakes, or the simulator's plant over zenoh)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 
-from firefleet.cli._console import EXIT_CLAIM_FAILED, EXIT_OK, progress_bar
+from firefleet.cli._console import EXIT_CLAIM_FAILED, EXIT_OK, check_flag, progress_bar
 from firefleet.outputs import json_text, run_record, staged_dir
 
 __all__ = ["add_parsers"]
@@ -27,11 +28,19 @@ def add_parsers(sub: Any) -> None:
         help="run one robot's controllers on its hardware (or on fakes of it)",
     )
     robot.add_argument("config", metavar="CONFIG", help="the robot's YAML configuration")
-    robot.add_argument(
+    where = robot.add_mutually_exclusive_group()
+    where.add_argument(
         "--fake",
         action="store_true",
         help="replace every device by its fake (a simulated Arduino on a pseudo-terminal, "
         "a Lepton replaying frames, a PT100 register model): runs on any machine",
+    )
+    where.add_argument(
+        "--sim",
+        metavar="ENDPOINT",
+        help="hardware in the loop: the motors and encoders are the plant of "
+        "`firefleet team SCENARIO --external --listen ENDPOINT`, over zenoh "
+        "(ENDPOINT: tcp/127.0.0.1:PORT; the run id is the config's link.run_id)",
     )
     robot.add_argument("--out", metavar="DIR", help="folder for the log and the summary")
     robot.set_defaults(handler=cmd_robot)
@@ -54,20 +63,24 @@ def cmd_robot(args: argparse.Namespace, out: Console, err: Console) -> int:
     """``firefleet robot CONFIG``."""
     from firefleet.robot import load_role, open_adapters, read_robot_config, run_onboard
 
+    if args.sim is not None:
+        check_flag(args.sim.startswith("tcp/127.0.0.1:"), "--sim", args.sim, "tcp/127.0.0.1:PORT")
     config, folder = read_robot_config(args.config)
     scenario = load_role(config, folder)
     dest = Path(args.out) if args.out else Path("runs") / f"robot-{config.robot}"
     stop = threading.Event()
     record = run_record(args.command_line, seed=None)
     with staged_dir(dest, record=record) as stage:
-        with _signals(stop), open_adapters(config, fake=args.fake) as adapters:
-            label = f"robot {config.robot} of {scenario.name}" + (" (fake)" if args.fake else "")
+        opened = open_adapters(
+            config, fake=args.fake, sim=args.sim, n_robots=scenario.n_robots,
+            dt_s=scenario.dt_s,
+        )  # fmt: skip
+        with _signals(stop), opened as adapters:
+            mode = " (fake)" if args.fake else f" (sim at {args.sim})" if args.sim else ""
+            label = f"robot {config.robot} of {scenario.name}{mode}"
             with progress_bar(err, label) as progress:
                 result = run_onboard(config, scenario, adapters, stop=stop, progress=progress)
-            link = {
-                "crc_errors": adapters.motors.crc_errors,
-                "framing_errors": adapters.motors.framing_errors,
-            }
+            link = adapters.link_errors
         summary = {"robot": config.robot, "scenario": scenario.name, **result.summary(),
                    "motor_link": link}  # fmt: skip
         (stage / "summary.json").write_text(json_text(summary), encoding="utf-8")
@@ -91,5 +104,13 @@ def cmd_robot(args: argparse.Namespace, out: Console, err: Console) -> int:
         markup=False,
         highlight=False,
     )
+    team = result.team_link
+    if team is not None:
+        out.print(
+            f"team link: {team['estops']} lost-link e-stops, {team['estopped_s']:.2f} s "
+            f"stopped, {sum(team['received'].values())} teammate messages heard",
+            markup=False,
+            highlight=False,
+        )
     out.print(f"wrote {dest}/")
     return EXIT_CLAIM_FAILED if result.stop_reason == "overruns" else EXIT_OK

@@ -58,6 +58,31 @@ def add_parsers(sub: Any) -> None:
         action="store_true",
         help="also run the scenario in one process and record the largest difference",
     )
+    team.add_argument(
+        "--external",
+        action="store_true",
+        help="hardware in the loop: start no robot process, wait for the scenario's robots "
+        "to join (`firefleet robot CONFIG --sim ENDPOINT` on each), then run the plant",
+    )
+    team.add_argument(
+        "--listen",
+        metavar="ENDPOINT",
+        help="the plant's zenoh endpoint, tcp/127.0.0.1:PORT (default: a free port; "
+        "--external needs it fixed)",
+    )
+    team.add_argument(
+        "--run-id",
+        metavar="HEX",
+        help="the run id, 16 hex digits (default: random; with --external "
+        "0000000000000001, a robot config's default link.run_id)",
+    )
+    team.add_argument(
+        "--wait",
+        type=float,
+        default=60.0,
+        metavar="S",
+        help="--external: how long to wait for every robot to join [s]",
+    )
     team.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     team.set_defaults(handler=cmd_team)
 
@@ -72,14 +97,28 @@ def cmd_team(args: argparse.Namespace, out: Console, err: Console) -> int:
         check_flag(args.seed >= 0, "--seed", args.seed, ">= 0")
         scenario = dataclasses.replace(scenario, seed=args.seed)
     check_flag(args.timeout > 0, "--timeout", args.timeout, "> 0 seconds")
+    check_flag(args.wait > 0, "--wait", args.wait, "> 0 seconds")
+    check_flag(
+        args.listen is None or args.listen.startswith("tcp/127.0.0.1:"),
+        "--listen",
+        args.listen,
+        "tcp/127.0.0.1:PORT",
+    )
+    check_flag(not args.external or args.listen is not None, "--listen", None,
+               "given with --external (the endpoint the robots connect to)")  # fmt: skip
+    run_id = _run_id(args.run_id, external=args.external)
     dest = Path(args.out) if args.out else Path("runs") / f"{scenario.name}-team"
     rec_steps = np.arange(scenario.n_steps + 1)
     record = run_record(args.command_line, seed=scenario.seed)
     with staged_dir(dest, record=record) as stage:
-        with progress_bar(err, f"{scenario.name} over zenoh ({args.clock})") as progress:
+        where = ", external robots" if args.external else ""
+        label = f"{scenario.name} over zenoh ({args.clock}{where})"
+        with progress_bar(err, label) as progress:
             result, network = run_team(
-                scenario, rec_steps, clock=args.clock, timeout_s=args.timeout, progress=progress
-            )
+                scenario, rec_steps, clock=args.clock, timeout_s=args.timeout,
+                progress=progress, external=args.external, listen=args.listen,
+                run_id=run_id, wait_s=args.wait,
+            )  # fmt: skip
         metrics = compute_metrics(result)
         document = metrics_document(scenario.name, scenario.claims, metrics)
         net = network.document()
@@ -105,6 +144,18 @@ def cmd_team(args: argparse.Namespace, out: Console, err: Console) -> int:
     out.print(_summary(net), markup=False, highlight=False)
     out.print(f"wrote {dest}/")
     return EXIT_OK if all_passed(document) and not net["failed_robots"] else EXIT_CLAIM_FAILED
+
+
+def _run_id(text: str | None, *, external: bool) -> int | None:
+    """``--run-id`` as an int (None: random), 1 by default with ``--external``."""
+    if text is None:
+        return 1 if external else None
+    try:
+        value = int(text, 16)
+    except ValueError:
+        value = -1
+    check_flag(len(text) == 16 and value >= 0, "--run-id", text, "16 hex digits")
+    return value
 
 
 def _summary(net: dict[str, Any]) -> str:

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import pickle
 import secrets
@@ -170,6 +171,7 @@ class _Exchange:
         self.late = 0
         self.tick = 0
         self.stopping = False
+        self.dt_s = math.nan  # the scenario's tick [s]: a hello with another is refused
 
     def on_sample(self, sample: Any) -> None:
         data = sample.payload.to_bytes()
@@ -180,6 +182,9 @@ class _Exchange:
             if msg is None or msg.robot == PLANT:
                 return
             if isinstance(msg, Hello):
+                if msg.n_robots != self.run.n_robots or msg.dt_s != self.dt_s:
+                    self.run.counters.dropped["mismatch"] += 1  # another scenario's robot
+                    return
                 self.hello.add(msg.robot)
             elif isinstance(msg, Command):
                 if msg.tick == self.tick:
@@ -241,6 +246,10 @@ def run_team(
     timeout_s: float = 1.0,
     progress: ProgressCallback | None = None,
     started: Callable[[dict[str, Any]], None] | None = None,
+    external: bool = False,
+    listen: str | None = None,
+    run_id: int | None = None,
+    wait_s: float = _START_TIMEOUT_S,
 ) -> tuple[SimResult, TeamRun]:
     """Run ``scenario`` with each robot's controller in its own process, over zenoh.
 
@@ -259,6 +268,17 @@ def run_team(
         Called once every robot has said hello, before the first tick, with
         ``{"run_id": int, "endpoint": the plant's zenoh endpoint, "pids": the robot
         processes' ids}``.
+    external : bool
+        Start no robot process: wait up to ``wait_s`` for the scenario's robots to join
+        (their liveliness tokens and hellos), e.g. ``firefleet robot CONFIG --sim
+        ENDPOINT`` on each (hardware in the loop); their summaries are their own.
+    listen : str, optional
+        The plant's endpoint (``tcp/127.0.0.1:PORT``; default a free port).
+    run_id : int, optional
+        The run's id (default random; external robots must know it: their
+        configuration's ``link.run_id``).
+    wait_s : float
+        How long the plant waits for every robot to join [s].
 
     Returns
     -------
@@ -295,11 +315,16 @@ def run_team(
             f"{layout.series_size + layout.width} values per robot a tick; a command "
             f"carries at most {MAX_SERIES}"
         )
-    run = TeamRun(run_id=secrets.randbits(64), clock=clock, n_robots=n, misses=[0] * n)
+    run = TeamRun(
+        run_id=secrets.randbits(64) if run_id is None else run_id,
+        clock=clock,
+        n_robots=n,
+        misses=[0] * n,
+    )
     keys = Keys(run.run_id)
     ex = _Exchange(run)
-    port = free_port()
-    endpoint = f"tcp/127.0.0.1:{port}"
+    ex.dt_s = scenario.dt_s
+    endpoint = listen if listen is not None else f"tcp/127.0.0.1:{free_port()}"
     session = open_session(listen=[endpoint], connect=[])
     procs: list[subprocess.Popen[bytes]] = []
     with tempfile.TemporaryFile() as log:
@@ -315,11 +340,26 @@ def run_team(
             ]
             token = session.liveliness().declare_token(keys.alive_plant)
             t_start = time.monotonic()
-            procs = [_spawn(scenario, i, run.run_id, endpoint, log) for i in range(n)]
+            if not external:
+                procs = [_spawn(scenario, i, run.run_id, endpoint, log) for i in range(n)]
             with ex.cond:
-                while len(ex.hello) < n:
+                while len(ex.hello) < n or len(ex.alive) < n:
+                    if external and time.monotonic() - t_start > wait_s:
+                        missing = sorted(set(range(n)) - (ex.hello & ex.alive))
+                        raise InputError(
+                            f"--wait: {wait_s:g} s passed and robots "
+                            f"{[i + 1 for i in missing]} of {n} did not join at {endpoint} "
+                            f"(run id {run.run_id:016x}); start each with `firefleet robot "
+                            f"CONFIG --sim {endpoint}`, its config's link.run_id the same"
+                            + (
+                                f"; {run.counters.dropped['mismatch']} hellos refused (team "
+                                f"size or tick not the scenario's: {n} robots, {ex.dt_s} s)"
+                                if run.counters.dropped["mismatch"]
+                                else ""
+                            )
+                        )
                     gone = [i for i, p in enumerate(procs) if p.poll() is not None]
-                    if gone or time.monotonic() - t_start > _START_TIMEOUT_S:
+                    if gone or time.monotonic() - t_start > wait_s:
                         log.seek(0)
                         tail = log.read().decode(errors="replace").strip().splitlines()[-3:]
                         raise InputError(

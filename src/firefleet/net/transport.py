@@ -17,6 +17,8 @@ Key expressions, under ``firefleet/<run-id>/`` (the run id as 16 hex digits)::
     team/progress          TeamProgress  plant -> everyone, each tick
     clock                  Tick       plant -> everyone (the stop)
     robot/<i>/bye          Bye        robot i -> plant, when it leaves
+    team/robot/<i>         TeamProgress  robot i -> its teammates, each period (the
+                                      on-board team link: its own row only)
     alive/robot/<i>        liveliness token of robot i's process
     alive/plant            liveliness token of the plant's process
 
@@ -80,6 +82,10 @@ class Keys:
 
     def bye(self, robot: int | str) -> str:
         return f"{self.root}/robot/{robot}/bye"
+
+    def team(self, robot: int | str) -> str:
+        """``team/robot/<i>``: robot i's own progress, to its teammates (on board)."""
+        return f"{self.root}/team/robot/{robot}"
 
     def alive(self, robot: int) -> str:
         return f"{self.root}/alive/robot/{robot}"

@@ -15,6 +15,13 @@ A YAML file (``examples/robot-fake.yaml`` runs on any machine with ``--fake``)::
       webcams: {adapter: v4l2, left: /dev/video0, right: /dev/video2, rate_hz: 2.0}
     safety:
       overrun_streak: 10             # this many late periods in a row: e-stop, exit 1
+    link:                            # the team link (absent: the robot runs alone)
+      team: true                     # publish this robot's progress, hear its teammates'
+      run_id: "0000000000000001"     # the run's id (16 hex digits), the plant's --run-id
+      timeout_s: 1.0                 # no teammate's message this long: lost-link e-stop
+      rearm_s: 0.5                   # the link back this long: the e-stop released
+      listen: tcp/127.0.0.1:0        # --fake: the zenoh endpoints of the link (with
+      connect: []                    # --sim, the plant's endpoint is the link's)
 
 Unknown keys, wrong types and out-of-range values are errors naming the key
 (``robot.yaml: hardware.motors.adapter: ...``), as for scenarios.
@@ -33,7 +40,7 @@ import yaml
 
 from firefleet.errors import InputError
 
-__all__ = ["HardwareConfig", "RobotConfig", "parse_robot_config", "read_robot_config"]
+__all__ = ["HardwareConfig", "LinkConfig", "RobotConfig", "parse_robot_config", "read_robot_config"]
 
 _STRICT = pydantic.ConfigDict(extra="forbid", strict=True)
 
@@ -129,6 +136,34 @@ class SafetyConfig:
     overrun_streak: int = pydantic.Field(default=10, ge=1)
 
 
+def _run_id(value: str) -> str:
+    try:
+        ok = len(value) == 16 and int(value, 16) >= 0
+    except ValueError:
+        ok = False
+    if not ok:
+        raise ValueError(f"expected 16 hex digits, got {value!r}")
+    return value.lower()
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class LinkConfig:
+    """The team link over zenoh: this robot's progress out, its teammates' in, and the
+    lost-link e-stop (see :mod:`firefleet.robot._teamlink`)."""
+
+    team: bool = True
+    run_id: str = "0000000000000001"
+    timeout_s: float = pydantic.Field(default=1.0, gt=0.0, le=60.0)
+    rearm_s: float = pydantic.Field(default=0.5, ge=0.0, le=60.0)
+    listen: str = "tcp/127.0.0.1:0"
+    connect: list[str] = field(default_factory=list)
+
+    @pydantic.field_validator("run_id")
+    @classmethod
+    def _check_run_id(cls, value: str) -> str:
+        return _run_id(value)
+
+
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class RobotConfig:
     """One robot's on-board configuration (module notes)."""
@@ -138,6 +173,7 @@ class RobotConfig:
     duration_s: float | None = pydantic.Field(default=None, gt=0.0)
     hardware: HardwareConfig = field(default_factory=HardwareConfig)
     safety: SafetyConfig = field(default_factory=SafetyConfig)
+    link: LinkConfig | None = None
 
 
 def _type_at(loc: tuple[Any, ...]) -> Any:
