@@ -402,6 +402,11 @@ def run_team(
                 ),
             )
             deadline = time.monotonic() + _EXIT_TIMEOUT_S
+            if external:  # stay until the robots have heard the stop and left (their
+                # tokens gone), else one may see the plant vanish first: "plant lost"
+                with ex.cond:
+                    while ex.alive and time.monotonic() < deadline:
+                        ex.cond.wait(0.05)
             for i, proc in enumerate(procs):
                 if i in ex.dead:  # failed: nothing to wait for (a hung one is killed below)
                     continue
