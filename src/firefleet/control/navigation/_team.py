@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -60,6 +60,7 @@ __all__ = [
     "NavigationParams",
     "NavigationState",
     "navigation_init",
+    "navigation_retarget",
 ]
 
 STATUSES = ("moving", "waiting", "arrived", "unreachable", "start_blocked", "goal_blocked")
@@ -342,4 +343,91 @@ def navigation_init(
         wall_points_m=_wall_points(grid),
         target_m=g.copy(),
         aside_of=np.full(n, -1, dtype=np.int64),
+    )
+
+
+def navigation_retarget(
+    state: NavigationState, goals_m: ArrayLike, which: ArrayLike
+) -> NavigationState:
+    """Give some robots new goals without re-initialising the team.
+
+    The robots in ``which`` drop their path (and any spot they were making way to) and
+    plan from where they are to their new goal at the next :func:`navigation_step`
+    (which knows their poses); the others keep their goals, paths and progress.
+
+    Parameters
+    ----------
+    state : NavigationState
+        From :func:`navigation_init` or a step.
+    goals_m : array_like, shape (N, 2)
+        Goals [m]; only the rows of ``which`` are read (they must be finite).
+    which : array_like of bool, shape (N,)
+        The robots to retarget.
+
+    Returns
+    -------
+    NavigationState
+        With ``status`` ``"moving"`` and no path for the retargeted robots.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.world import OccupancyGrid
+    >>> from firefleet.control.navigation import (
+    ...     NavigationInputs, NavigationParams, navigation_init, navigation_retarget,
+    ...     navigation_step)
+    >>> grid = OccupancyGrid(np.zeros((40, 60), bool), np.ones((40, 60), bool), 0.1)
+    >>> params = NavigationParams()
+    >>> pose = np.array([[1.0, 2.0, 0.0], [1.0, 3.0, 0.0]])
+    >>> state = navigation_init(grid, pose, [[5.0, 2.0], [5.0, 3.0]], params)
+    >>> state = navigation_retarget(state, [[0.0, 0.0], [3.0, 3.0]], [False, True])
+    >>> state.goals_m.tolist(), state.paths[1] is None
+    ([[5.0, 2.0], [3.0, 3.0]], True)
+    >>> state, v, w = navigation_step(state, NavigationInputs(pose, {}, pose[:, :2], 0.0),
+    ...                               params, 0.1)
+    >>> round(state.paths[1].length_m, 1), state.status  # planned from its pose
+    (2.0, ('moving', 'moving'))
+    """
+    n = state.goals_m.shape[0]
+    mask = np.asarray(which, dtype=bool).reshape(-1)
+    if mask.shape != (n,):
+        raise InputError(f"which must be {n} booleans (one per robot), got shape {mask.shape}")
+    g = np.asarray(goals_m, dtype=float)
+    if g.shape != (n, 2) or not np.isfinite(g[mask]).all():
+        raise InputError(f"goals_m must be ({n}, 2) and finite for the retargeted robots")
+    if not mask.any():
+        return state
+    goals = state.goals_m.copy()
+    goals[mask] = g[mask]
+    target = state.target_m.copy()
+    target[mask] = g[mask]
+    status = list(state.status)
+    paths = list(state.paths)
+    samples = list(state.samples)
+    for i in map(int, np.flatnonzero(mask)):
+        status[i] = "moving"
+        paths[i] = None
+        samples[i] = _samples(None)
+    progress = state.progress_m.copy()
+    progress[mask] = 0.0
+    best = state.best_progress_m.copy()
+    best[mask] = 0.0
+    since = state.since_s.copy()
+    since[mask] = -math.inf  # the next step plans at once
+    stuck = state.stuck_count.copy()
+    stuck[mask] = 0
+    aside = state.aside_of.copy()
+    aside[mask] = -1
+    return replace(
+        state,
+        goals_m=goals,
+        target_m=target,
+        status=tuple(status),
+        paths=tuple(paths),
+        samples=tuple(samples),
+        progress_m=progress,
+        best_progress_m=best,
+        since_s=since,
+        stuck_count=stuck,
+        aside_of=aside,
     )
