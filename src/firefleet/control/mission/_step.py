@@ -180,9 +180,9 @@ def _orders(
     inputs = NavigationInputs(pose=pose, ranges=obs.ranges, teammates_xy_m=pose[:, :2], t_s=obs.t_s)
     nav, v, w = navigation_step(state.nav, inputs, params.nav, params.nav_period_s)
     mode = state.mode
-    arrived = np.array([s != "moving" and s != "waiting" for s in nav.status])
-    near = np.hypot(*(pose[:, :2] - state.goal_xy_m).T) <= params.nav.goal_tolerance_m
-    at_goal = arrived | (near & np.isfinite(state.goal_xy_m[:, 0]))
+    # arrived, or stopped short for good (its goal blocked or out of reach)
+    at_goal = np.array([s != "moving" and s != "waiting" for s in nav.status])
+    arrived = at_goal
     w_max = params.nav.dwa.omega_max_rad_s
     spray = np.zeros(n, dtype=bool)
     ids, fxy, _ = fires_of(state.knowledge)
