@@ -165,12 +165,14 @@ def _render(
     person_c: float,
     outside_c: float,
     ceiling: bool,
-) -> np.ndarray:  # pragma: no cover - compiled
-    """Apparent temperature of every ray, shape (N, len(yn), len(xn))."""
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """Apparent temperature of every ray and its depth along the optical axis [m]
+    (inf where it leaves the grid), each of shape (N, len(yn), len(xn))."""
     n_robots = poses.shape[0]
     n_rows = yn.size
     n_cols = xn.size
     out = np.empty((n_robots, n_rows, n_cols))
+    depth = np.empty((n_robots, n_rows, n_cols))
     cap = 4 * (occ.shape[0] + occ.shape[1]) + 8
     s_out = np.empty(cap)
     t_out = np.empty(cap)
@@ -247,7 +249,8 @@ def _render(
                             best = s
                             best_t = person_c
                 out[k, r, c] = best_t
-    return out
+                depth[k, r, c] = best / length  # forward component of the unit ray: 1/length
+    return out, depth
 
 
 def grid_thermal_celsius(
@@ -260,8 +263,9 @@ def grid_thermal_celsius(
     yn: FloatArray,
     mount_height_m: float,
     scene: GridThermalScene,
-) -> FloatArray:
-    """The temperature each ray ``(xn[c], yn[r])`` meets, shape (N, R, C) [C].
+) -> tuple[FloatArray, FloatArray]:
+    """The temperature each ray ``(xn[c], yn[r])`` meets [C] and the depth of what it
+    meets along the optical axis [m] (inf: nothing on the grid), each (N, R, C).
 
     Rays in the camera's normalised coordinates (x right, y down, axis horizontal along
     each robot's heading), from ``mount_height_m`` above the floor.
@@ -278,7 +282,7 @@ def grid_thermal_celsius(
     local[:, 0] -= ox
     local[:, 1] -= oy
     people_local = people - np.array([ox, oy])
-    out: FloatArray = _render(
+    temps, depth = _render(
         local,
         np.ascontiguousarray(grid.occupied[::-1]),
         np.ascontiguousarray(temp[::-1], dtype=np.float64),
@@ -296,4 +300,4 @@ def grid_thermal_celsius(
         scene.outside_c,
         scene.ceiling,
     )
-    return out
+    return np.asarray(temps), np.asarray(depth)

@@ -35,6 +35,7 @@ __all__ = [
     "ThermalScene",
     "render_thermal",
     "render_thermal_grid",
+    "render_thermal_grid_depth",
 ]
 
 
@@ -350,11 +351,38 @@ def render_thermal_grid(
     >>> frames.shape, round(float(frames.min()), 6), round(float(frames.max()), 6)
     ((1, 60, 80), 25.0, 25.0)
     """
+    frames, _ = render_thermal_grid_depth(
+        poses, grid, temperature_c, burning, people_xy_m, params, rng=rng, scene=scene
+    )
+    return frames
+
+
+def render_thermal_grid_depth(
+    poses: ArrayLike,
+    grid: OccupancyGrid,
+    temperature_c: ArrayLike,
+    burning: ArrayLike,
+    people_xy_m: ArrayLike,
+    params: ThermalCameraParams | None = None,
+    *,
+    rng: np.random.Generator,
+    scene: GridThermalScene | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`render_thermal_grid`'s frames and, registered to them, each pixel's depth
+    along the optical axis [m] (its central ray's; NaN where nothing is on the grid):
+    what a stereo rig aligned with the thermal camera measures, noise-free (the caller
+    adds its noise).
+
+    Returns
+    -------
+    frames : ndarray, shape (N, H_px, W_px)
+    depth_m : ndarray, shape (N, H_px, W_px)
+    """
     prm = ThermalCameraParams() if params is None else params
     if prm.camera.distorted:
         raise InputError("thermal_camera.camera: the grid renderer takes an undistorted camera")
     xn, yn = _ray_grid(prm)
-    temps = grid_thermal_celsius(
+    temps, depth = grid_thermal_celsius(
         poses,
         grid,
         temperature_c,
@@ -369,7 +397,8 @@ def render_thermal_grid(
     n = temps.shape[0]
     h_px, w_px = prm.camera.height_px, prm.camera.width_px
     radiance = band_radiance(temps).reshape(n, h_px, s, w_px, s).mean(axis=(2, 4))
-    return _camera_output(radiance, prm, rng)
+    centre = depth.reshape(n, h_px, s, w_px, s)[:, :, s // 2, :, s // 2]
+    return _camera_output(radiance, prm, rng), np.where(np.isfinite(centre), centre, np.nan)
 
 
 def _render_radiance(
