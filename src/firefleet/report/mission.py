@@ -125,6 +125,7 @@ def animation_gif(result: SimResult, *, frames: int = _FRAMES) -> bytes:
     views rendered from the recorded fields at their poses."""
     from PIL import Image
 
+    from firefleet.sim.kinds._mission_world import SCENE
     from firefleet.sim.kinds.mission import _grid, mission_world
     from firefleet.sim.sensors import ThermalCameraParams, render_thermal_grid
 
@@ -147,11 +148,14 @@ def animation_gif(result: SimResult, *, frames: int = _FRAMES) -> bytes:
         t_s = float(t_field[j])
         k = int(np.argmin(np.abs(result.t - t_s)))
         fig = plt.figure(figsize=(8.0, 8.0 / wide * 0.75 + 1.8), layout="constrained")
-        top, bottom = fig.subfigures(2, 1, height_ratios=[3.0, 1.0])
+        subs: Any = fig.subfigures(2, 1, height_ratios=[3.0, 1.0])
+        top, bottom = subs[0], subs[1]
         ax = top.subplots()
         _scene(ax, grid, world.field, fire[j], smoke[j])
         for i in range(n):
-            ax.plot(result.pose[: k + 1, i, 0], result.pose[: k + 1, i, 1], color=colours[i], lw=0.8)
+            ax.plot(
+                result.pose[: k + 1, i, 0], result.pose[: k + 1, i, 1], color=colours[i], lw=0.8
+            )
             ax.plot(*result.pose[k, i, :2], "o", color=colours[i], ms=5, mec="k", mew=0.5)
         _people(ax, world, found, t_s)
         ax.set_title(f"{result.scenario.name}  t = {t_s:.0f} s", fontsize=9)
@@ -163,6 +167,7 @@ def animation_gif(result: SimResult, *, frames: int = _FRAMES) -> bytes:
             world.victim_xy_m,
             camera,
             rng=np.random.default_rng(0),
+            scene=SCENE,
         )
         axes = np.atleast_1d(bottom.subplots(1, _INSETS))
         for i, axi in enumerate(axes):
@@ -188,5 +193,3 @@ def figures(result: SimResult, metrics: dict[str, Any]) -> dict[str, bytes]:
         "mission.png": overview_png(result, metrics),
         "mission.gif": animation_gif(result),
     }
-
-

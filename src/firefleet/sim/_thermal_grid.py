@@ -63,6 +63,15 @@ class GridThermalScene:
         What a ray that leaves the grid meets [C].
     ceiling : bool
         Whether there is a ceiling (else rays above the walls meet ``outside_c``).
+    layer_height_m : float
+        Height of the interface between a room fire's hot upper layer and its cooler
+        lower layer [m] (two-zone model): the floor and the walls below it show
+        ``ambient_c + lower_fraction (T - ambient_c)`` of the field's temperature T.
+    lower_fraction : float
+        The lower layer's share of the field's temperature rise (1: one zone, the
+        field everywhere).
+    ambient_c : float
+        Ambient temperature [C] of that rise.
 
     Examples
     --------
@@ -77,6 +86,9 @@ class GridThermalScene:
     person_c: float = BODY_C
     outside_c: float = 10.0
     ceiling: bool = True
+    layer_height_m: float = 1.2
+    lower_fraction: float = 1.0
+    ambient_c: float = 20.0
 
     def __post_init__(self) -> None:
         check_fields(self, "thermal_scene", positive=("wall_height_m", "flame_height_m"))
@@ -165,6 +177,9 @@ def _render(
     person_c: float,
     outside_c: float,
     ceiling: bool,
+    layer_h: float,
+    lower: float,
+    ambient: float,
 ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
     """Apparent temperature of every ray and its depth along the optical axis [m]
     (inf where it leaves the grid), each of shape (N, len(yn), len(xn))."""
@@ -207,6 +222,8 @@ def _render(
                 slope = -yn[r] / length  # height gained per horizontal metre
                 best = s_wall
                 best_t = t_wall if s_wall < np.inf else outside_c
+                if s_wall < np.inf and mount_h + slope * s_wall < layer_h:
+                    best_t = ambient + lower * (t_wall - ambient)  # below the hot layer
                 # floor or ceiling, where the ray meets it
                 s_plane = np.inf
                 if slope < 0.0:
@@ -224,6 +241,8 @@ def _render(
                         else:
                             hi = mid
                     best_t = t_out[lo] if lo < n else outside_c
+                    if slope < 0.0 and lo < n:  # the floor, under the hot layer
+                        best_t = ambient + lower * (best_t - ambient)
                 elif s_wall == np.inf and best == np.inf:
                     best_t = outside_c
                 # flames: the first burning cell whose column of flame the ray crosses
@@ -299,5 +318,8 @@ def grid_thermal_celsius(
         scene.person_c,
         scene.outside_c,
         scene.ceiling,
+        scene.layer_height_m,
+        scene.lower_fraction,
+        scene.ambient_c,
     )
     return np.asarray(temps), np.asarray(depth)

@@ -7,7 +7,12 @@ fires ignite at their ``start_s``, the fire automaton spreads (world.fire_step),
 smoke diffuse (world.diffuse_step), victims breathe (world.victim_step), the robots'
 spray of the last orders acts (world.spray_step) and drains their tanks, robots standing
 at the refill point fill theirs, and a robot in air hotter than its rating is damaged
-(its motors get no voltage from then on). It also keeps the run's log for the metrics
+(its motors get no voltage from then on). Robots (their PT100 at ~0.3 m) and people on
+the floor breathe the lower layer of a two-zone room fire, cooler and cleaner than the
+hot upper layer the heat and smoke fields stand for: their air is taken as ambient plus
+``LOWER_LAYER`` of the field's rise (lower-layer rises of 20-50 % of the upper layer's
+are typical of room fire tests; Quintiere, Principles of Fire Behavior, 2nd ed., 2016,
+ch. 11). It also keeps the run's log for the metrics
 (the fields about every ``record_s``, every detection, when each true victim was found):
 bookkeeping of what happened, never read by the team.
 
@@ -32,6 +37,7 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 from firefleet.perception.thermal import detect
+from firefleet.sim._thermal_grid import GridThermalScene
 from firefleet.sim.drive import DriveState
 from firefleet.sim.loop import Messages, WorldState
 from firefleet.world import (
@@ -54,6 +60,12 @@ from firefleet.world import (
 
 __all__ = ["DETECTION_DTYPE", "MissionSensors", "MissionWorld", "MissionWorldState"]
 
+LOWER_LAYER = 0.4
+"""Rise of the air near the floor as a fraction of the field's (module notes)."""
+
+SCENE = GridThermalScene(lower_fraction=LOWER_LAYER, ambient_c=HEAT.ambient)
+"""What the cameras see: the floor and the lower walls in the cooler lower layer."""
+
 FIRE, PERSON = 0, 1
 """Detection kinds as the sensors stage numbers them."""
 
@@ -69,6 +81,11 @@ DETECTION_DTYPE = np.dtype(
     ]
 )
 """The ``detections`` array of a mission's result: each thermal detection on the map."""
+
+
+def lower_layer(field_c: FloatArray, ambient_c: float) -> FloatArray:
+    """Air temperature near the floor [C] under a field (upper-layer) temperature."""
+    return np.asarray(ambient_c + LOWER_LAYER * (np.asarray(field_c, dtype=float) - ambient_c))
 
 
 def nearest_open(grid: OccupancyGrid, xy_m: FloatArray) -> tuple[int, int]:
@@ -236,7 +253,9 @@ class MissionWorld:
             tank = tank - used
             log["water_used_l"] = log["water_used_l"] + used
         tank = np.where(
-            state.refill & ~state.damaged, np.minimum(tank + self.refill_l_s * dt, self.tank_l), tank
+            state.refill & ~state.damaged,
+            np.minimum(tank + self.refill_l_s * dt, self.tank_l),
+            tank,
         )
         open_cells = ~self.field.occupied
         burning = fire.state == BURNING
@@ -245,12 +264,20 @@ class MissionWorld:
             state.smoke_per_m, open_cells, burning, SMOKE, dt, self.field.resolution_m
         )
         vr, vc = self.victim_cells[:, 0], self.victim_cells[:, 1]
-        victims = victim_step(state.victims, temp[vr, vc], smoke[vr, vc], self.victim_params, dt)
+        victims = victim_step(
+            state.victims,
+            lower_layer(temp[vr, vc], HEAT.ambient),
+            LOWER_LAYER * smoke[vr, vc],
+            self.victim_params,
+            dt,
+        )
         damaged = state.damaged
         if np.isfinite(state.pose[:, 0]).any():
             rc = self.field.cell_of(np.nan_to_num(state.pose[:, :2]))
             h, w = self.field.shape
-            air = temp[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+            air = lower_layer(
+                temp[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)], HEAT.ambient
+            )
             damaged = damaged | (np.isfinite(state.pose[:, 0]) & (air > self.rating_c))
         if started.all() and not burning.any() and np.isnan(log["all_out_s"]):
             log["all_out_s"] = t_s
@@ -271,7 +298,9 @@ class MissionWorld:
         self._snapshot(new, t_s)
         return new
 
-    def act(self, state: MissionWorldState, actions: Messages, pose: FloatArray) -> MissionWorldState:
+    def act(
+        self, state: MissionWorldState, actions: Messages, pose: FloatArray
+    ) -> MissionWorldState:
         """Take the team's orders (spray, refill) and its log entries (detections on the
         map, confirmed victims, coverage) at the robots' true poses."""
         log = state.log
@@ -310,7 +339,7 @@ class MissionWorld:
             "fire_state": np.asarray(log["fire_state"], dtype=np.int8),
             "temperature_c": np.asarray(log["temperature_c"], dtype=np.float32),
             "smoke_per_m": np.asarray(log["smoke_per_m"], dtype=np.float32),
-            "detections": det,  # type: ignore[dict-item]
+            "detections": det,
             "victims_found_s": log["victims_found_s"].copy(),
             "victim_dose": state.victims.dose.copy(),
             "damaged": state.damaged.astype(float),
@@ -356,9 +385,10 @@ class MissionSensors:
         field = self.world.field
         h, w = field.shape
         rc = field.cell_of(drive.pose[:, :2])
-        out["air_c"] = world.temperature_c[
-            np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)
-        ].astype(float)
+        out["air_c"] = lower_layer(
+            world.temperature_c[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)],
+            HEAT.ambient,
+        )
         out["tank_l"] = np.asarray(world.tank_l, dtype=float)
         out["damaged"] = np.asarray(world.damaged, dtype=float)
         k = round(world.t_s / self.dt_s)
@@ -377,6 +407,7 @@ class MissionSensors:
             self.world.victim_xy_m,
             self.camera,
             rng=self.rng,
+            scene=SCENE,
         )
         depth = depth * (1.0 + self.depth_noise * self.rng.standard_normal(depth.shape))
         rows: list[list[float]] = []

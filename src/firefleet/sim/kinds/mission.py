@@ -33,8 +33,8 @@ import numpy as np
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
-from firefleet.scenarios.schema import Scenario
 from firefleet.scenarios._mission import Mission
+from firefleet.scenarios.schema import Scenario
 from firefleet.sim.kinds._mission_world import (
     FIRE,
     PERSON,
@@ -108,7 +108,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     fuel = np.full(field.shape, spec.fuel.default)
     if spec.fuel.regions:
         h, w = field.shape
-        centres = field.center_of(np.stack(np.mgrid[0:h, 0:w], axis=-1))
+        centres = field.center_of(np.moveaxis(np.indices((h, w)), 0, -1))
         for region in spec.fuel.regions:
             inside = (
                 (centres[..., 0] >= region.x_m[0])
@@ -120,7 +120,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     fuel[field.occupied] = 0.0
     fires = np.array([[f.x_m, f.y_m] for f in spec.fires], dtype=float).reshape(-1, 2)
     victims = np.array([[v.x_m, v.y_m] for v in spec.victims], dtype=float).reshape(-1, 2)
-    from firefleet.world import SprayParams
+    from firefleet.world import FireParams, SprayParams
 
     return MissionWorld(
         field=field,
@@ -138,6 +138,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
         record_s=cmd.record_s,
         seed=scenario.seed,
         spray_params=SprayParams(flow_l_s=cmd.flow_l_s, range_m=cmd.spray_range_m),
+        fire_params=FireParams(spread_m_s=spec.spread_m_s),
     )
 
 
@@ -178,9 +179,11 @@ def mission_stages(scenario: Scenario, decider: Decider, rng: np.random.Generato
         dt_s=scenario.dt_s,
         rng=rng,
     )
-    return dataclasses.replace(
+    stages: Any = dataclasses.replace  # the Stages fields are typed for the default stages
+    out: Stages = stages(
         default_stages(scenario, decider), world=world, sensors=sensors, estimation=Odometry()
     )
+    return out
 
 
 # --- the decision --------------------------------------------------------------------------
@@ -209,6 +212,13 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
         tank_l=cmd.tank_l,
         flow_l_s=cmd.flow_l_s,
         refill_l_s=REFILL_L_S,
+        # a person is confirmed by a robot that sees them again from within 3 m (the
+        # detector cannot call a standing person a person from much closer: the frame
+        # cuts them); found when that position lies within 2 m of them (the world's test)
+        confirm_radius_m=3.0,
+        # a fire never takes the whole team: one robot at least keeps searching for people
+        fire_robots_max=max(1, min(6, scenario.n_robots - 1)),
+        fire_robots_min=min(2, max(1, scenario.n_robots - 1)),
         nav=NavigationParams(robot_radius_m=cmd.robot_radius_m),
     )
     params = MissionParams(tactics, scenario.robot, reading_bearings(scenario), cmd.robots)
@@ -293,7 +303,9 @@ def mission_decide(
     if rows.shape[0]:
         both = np.concatenate(
             [
-                np.c_[np.full(len(fire_xy), inputs.t_s), fire_robot, np.zeros(len(fire_xy)), fire_xy],
+                np.c_[
+                    np.full(len(fire_xy), inputs.t_s), fire_robot, np.zeros(len(fire_xy)), fire_xy
+                ],
                 np.c_[
                     np.full(len(person_xy), inputs.t_s),
                     person_robot,
@@ -370,7 +382,7 @@ def mission_metrics(result: SimResult) -> Metrics:
     fire_state = np.asarray(x["fire_state"])
     final = fire_state[-1]
     area = world.field.resolution_m**2
-    det = x["detections"]
+    det: Any = x["detections"]  # structured (DETECTION_DTYPE)
     fire_det = det[det["kind"] == "fire"]
     burned_xy = [
         world.field.center_of(np.argwhere(final != UNBURNT)),
@@ -404,13 +416,13 @@ def mission_metrics(result: SimResult) -> Metrics:
         collided = int(touch.sum())
     return {
         "fires_detected": float(detected),
-        "first_detection_s": float(fire_det["t_s"].min()) if len(fire_det) else None,
+        "first_detection_s": float(fire_det["t_s"].min()) if len(fire_det) else math.nan,
         "fires_extinguished": float(extinguished),
-        "all_out_s": None if math.isnan(all_out) else all_out,
+        "all_out_s": all_out,  # NaN (null in metrics.json): not all out
         "burned_area_m2": float(np.count_nonzero(final != UNBURNT) * area),
         "baseline_burned_area_m2": baseline_burned_area_m2(scenario),
         "victims_found": float(np.count_nonzero(np.isfinite(found_s))),
-        "victims_found_s": [None if math.isnan(v) else float(v) for v in found_s],
+        "victims_found_s": [float(v) for v in found_s],  # NaN: not found
         "victims_alive": float(np.count_nonzero(np.asarray(x["victim_dose"]) < 1.0)),
         "explored_pct": float(np.asarray(x["explored_pct"])[0]),
         "collisions": float(collided),
