@@ -128,7 +128,7 @@ class TacticsParams:
     coverage_period_s: float = 0.25
     nav_period_s: float = 0.1
     plan_cell_m: float = 0.25
-    travel_limit_m: float = 25.0
+    travel_limit_m: float = 15.0
     detour_factor: float = 1.5
     burgard_beta: float = 0.02
     scan_omega_rad_s: float = 1.0
