@@ -89,8 +89,13 @@ class TacticsParams:
         farther cost their straight-line distance times ``detour_factor``.
     detour_factor : float
         Straight-line distance multiplier for frontiers past ``travel_limit_m``.
+    probe_m : float
+        An explorer's goal lies up to this far past its frontier, into the uncovered
+        floor [m] (0: on the frontier).
     burgard_beta : float
         Weight of travel cost against utility in Burgard's frontier choice [1/m].
+    stall_s : float
+        An explorer that comes no closer to its goal in this time gives it up [s].
     scan_omega_rad_s : float
         Turn rate of a robot that reached its frontier and looks around [rad/s].
     face_gain : float
@@ -130,7 +135,9 @@ class TacticsParams:
     plan_cell_m: float = 0.25
     travel_limit_m: float = 15.0
     detour_factor: float = 1.5
+    probe_m: float = 0.75
     burgard_beta: float = 0.02
+    stall_s: float = 10.0
     scan_omega_rad_s: float = 1.0
     face_gain: float = 2.0
     keep_bonus_m: float = 2.0
@@ -163,9 +170,16 @@ class TacticsParams:
                 "travel_limit_m",
                 "detour_factor",
                 "scan_omega_rad_s",
+                "stall_s",
                 "face_gain",
             ),
-            non_negative=("low_tank_frac", "low_tank_penalty_m", "burgard_beta", "keep_bonus_m"),
+            non_negative=(
+                "low_tank_frac",
+                "low_tank_penalty_m",
+                "burgard_beta",
+                "keep_bonus_m",
+                "probe_m",
+            ),
         )
         for name in ("confirm_repeats", "fire_out_looks", "fire_robots_min", "frontier_min_cells"):
             if int(getattr(self, name)) < 1:

@@ -21,7 +21,14 @@ from firefleet.control.mission._params import (
     TacticsObservation,
     TacticsParams,
 )
-from firefleet.control.mission._plan import _empty_l, allocate, explore, fire_demand, task_distances
+from firefleet.control.mission._plan import (
+    _empty_l,
+    allocate,
+    explore,
+    fire_demand,
+    probe,
+    task_distances,
+)
 from firefleet.control.mission._ring import ring_slots
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.navigation import NavigationInputs, navigation_retarget, navigation_step
@@ -61,7 +68,11 @@ def _retarget(state: TacticsState, goals: FloatArray, pose: FloatArray) -> Tacti
         return replace(state, goal_xy_m=goals)
     nav_goal = np.where(fin[:, None], goals, pose[:, :2])
     nav = navigation_retarget(state.nav, nav_goal, moved)
-    return replace(state, nav=nav, goal_xy_m=goals)
+    closest = state.closest_m.copy()
+    closest[moved] = np.inf
+    since = state.closest_s.copy()
+    since[moved] = max(state.t_s, 0.0)
+    return replace(state, nav=nav, goal_xy_m=goals, closest_m=closest, closest_s=since)
 
 
 def _fight_goals(
@@ -144,18 +155,26 @@ def _plan(
     free = available & (task_fire < 0) & (task_victim < 0)
     status = state.nav.status
     keep = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
+    cm = state.coarse
+    goal_rc = cm.cell_of(np.nan_to_num(state.goal_xy_m, nan=-1e9))
+    goal_open = (
+        np.isfinite(state.goal_xy_m[:, 0]) & ~state.covered_coarse[goal_rc[:, 0], goal_rc[:, 1]]
+    )
     cells = explore(
-        state.coarse,
+        cm,
         state.covered_coarse,
         pose,
         free,
         state.explore_cell,
         keep,
+        goal_open,
         state.excluded,
         params,
     )
     has = free & (cells[:, 0] >= 0)
-    goals[has] = state.coarse.goal_xy(cells[has])
+    same = has & np.all(cells == state.explore_cell, axis=1) & keep
+    fresh = has & ~same
+    goals[fresh] = cm.goal_xy(probe(cm, state.covered_coarse, cells[fresh], params.probe_m))
     mode[has] = EXPLORE
     idle = free & ~has
     goals[idle] = np.nan
@@ -295,6 +314,33 @@ def _dropped(state: TacticsState, pose: FloatArray, lost: BoolArray) -> TacticsS
     return replace(new, nav=nav)
 
 
+def _watchdog(
+    state: TacticsState, pose: FloatArray, t: float, params: TacticsParams
+) -> TacticsState:
+    """Explorers that neither reach their goal nor come 0.2 m closer to it in
+    ``stall_s`` (or stand within the goal tolerance of it without navigation calling
+    it reached) give their frontier up; the team re-plans."""
+    goal = state.goal_xy_m
+    d = np.hypot(pose[:, 0] - goal[:, 0], pose[:, 1] - goal[:, 1])
+    better = np.isfinite(d) & (d < state.closest_m - 0.2)
+    closest = np.where(better, d, state.closest_m)
+    since = np.where(better, t, state.closest_s)
+    explorers = state.mode == EXPLORE
+    stalled = explorers & np.isfinite(d) & (t - since >= params.stall_s)
+    near = explorers & (d <= params.nav.goal_tolerance_m)
+    if not (stalled.any() or near.any()):
+        return replace(state, closest_m=closest, closest_s=since)
+    excluded = state.excluded
+    if stalled.any():
+        excluded = excluded.copy()
+        for i in map(int, np.flatnonzero(stalled)):
+            for rc in (state.explore_cell[i], state.coarse.cell_of(goal[i])):
+                if rc[0] >= 0:
+                    excluded[rc[0], rc[1]] = True
+        since = np.where(stalled, t, since)
+    return replace(state, closest_m=closest, closest_s=since, excluded=excluded, pending=True)
+
+
 def tactics_step(
     state: TacticsState, obs: TacticsObservation, params: TacticsParams, dt_s: float
 ) -> tuple[TacticsState, Orders]:
@@ -402,6 +448,7 @@ def tactics_step(
             state = replace(state, excluded=excluded, pending=True)
         if any(status[i] == "arrived" for i in explorers):
             state = replace(state, pending=True)
+        state = _watchdog(state, pose, t, params)
     since = t - state.last_plan_s
     if (state.pending and since >= params.replan_s) or since >= params.explore_replan_s:
         state = _plan(state, pose, tank, working, params)

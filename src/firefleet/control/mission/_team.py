@@ -53,6 +53,10 @@ class TacticsState:
         ``refill_l_s`` (up to ``tank_l``) while this holds.
     known_damaged : ndarray of bool, shape (N,)
         Robots the team has dropped (damaged or dead).
+    closest_m, closest_s : ndarray, shape (N,)
+        The stall watchdog: each robot's least distance to its goal so far [m], and
+        when it last came 0.2 m closer [s]. An explorer that has not for ``stall_s``
+        gives its frontier up (it joins ``excluded``) and the team re-plans.
     pending : bool
         A detection or a robot's state changed since the last allocation.
     last_plan_s, next_coverage_s, next_nav_s : float
@@ -82,6 +86,8 @@ class TacticsState:
     refill_spots_m: FloatArray
     refilling: BoolArray
     known_damaged: BoolArray
+    closest_m: FloatArray
+    closest_s: FloatArray
     pending: bool
     last_plan_s: float
     next_coverage_s: float
@@ -235,6 +241,8 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         refill_spots_m=spots,
         refilling=np.zeros(n, dtype=bool),
         known_damaged=np.zeros(n, dtype=bool),
+        closest_m=np.full(n, np.inf),
+        closest_s=np.zeros(n),
         pending=True,
         last_plan_s=-np.inf,
         next_coverage_s=-np.inf,
