@@ -202,6 +202,18 @@ def _orders(
     # arrived, or stopped short for good (its goal blocked or out of reach)
     at_goal = np.array([s != "moving" and s != "waiting" for s in nav.status])
     arrived = at_goal
+    # a fighter or confirmer that has come no closer to its spot in stall_s settles
+    # where it is (navigation told it has arrived, so that no teammate waits for it)
+    # (a refiller too, if that is within refill_radius_m of its spot)
+    d = np.hypot(pose[:, 0] - state.goal_xy_m[:, 0], pose[:, 1] - state.goal_xy_m[:, 1])
+    settle = (
+        ((mode == FIGHT) | (mode == CONFIRM) | ((mode == REFILL) & (d <= params.refill_radius_m)))
+        & ~at_goal
+        & (obs.t_s - state.closest_s >= params.stall_s)
+    )
+    if settle.any():
+        nav = navigation_retarget(nav, pose[:, :2], settle)
+        at_goal = at_goal | settle
     w_max = params.nav.dwa.omega_max_rad_s
     spray = np.zeros(n, dtype=bool)
     ids, fxy, _ = fires_of(state.knowledge)
