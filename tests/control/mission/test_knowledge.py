@@ -202,3 +202,27 @@ def test_bad_input_names_the_key() -> None:
         tactics_step(state, _obs(1, tank_l=np.zeros(3)), P, 0.01)
     with pytest.raises(InputError, match="dt_s"):
         tactics_step(state, _obs(1), P, 0.0)
+
+
+def test_a_victim_looked_at_without_a_person_is_dismissed_until_seen_again() -> None:
+    state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
+    ghost = [[6.0, 5.0]]
+    k, _ = _update(empty_knowledge(), state, np.array([[2.0, 5.0, 0.0]]), people=ghost)
+    looking = np.array([[3.0, 5.0, 0.0]])  # 3 m away, facing it, nothing there
+    for _ in range(P.victim_out_looks - 1):
+        k, changed = _update(k, state, looking)
+        assert not changed
+    assert not k.dismissed(P)[0]
+    k, changed = _update(k, state, looking)
+    assert changed
+    assert k.dismissed(P)[0]
+    k, changed = _update(k, state, looking, people=ghost)  # a person there after all
+    assert changed
+    assert not k.dismissed(P)[0]
+    # a confirmed victim is never dismissed
+    k, _ = _update(empty_knowledge(), state, np.array([[5.0, 5.0, 0.0]]), people=ghost)
+    k, _ = _update(k, state, np.array([[5.0, 5.0, 0.0]]), people=ghost)
+    assert k.victim_confirmed[0]
+    for _ in range(2 * P.victim_out_looks):
+        k, _ = _update(k, state, looking)
+    assert not k.dismissed(P)[0]

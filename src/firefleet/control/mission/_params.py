@@ -67,6 +67,12 @@ class TacticsParams:
     fire_out_looks : int
         Thermal frames in a row that look at a believed fire's spot (in the cone, in
         range, in line of sight) without detecting fire before the spot is believed out.
+    victim_out_looks : int
+        Looks in a row that see no person where an unconfirmed victim is believed
+        before it is dismissed as a false detection (until detected again).
+    explore_frac : float
+        While floor is left uncovered, at least this fraction of the working robots
+        (rounded up) keeps exploring: the fires' demands are cut to leave them.
     robot_per_fire_m : float
         A fire needs one robot more per this many metres of its extent's radius.
     fire_robots_min, fire_robots_max : int
@@ -125,6 +131,8 @@ class TacticsParams:
     fire_merge_m: float = 1.0
     victim_merge_m: float = 1.0
     fire_out_looks: int = 9
+    victim_out_looks: int = 18
+    explore_frac: float = 0.3
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -179,9 +187,16 @@ class TacticsParams:
                 "burgard_beta",
                 "keep_bonus_m",
                 "probe_m",
+                "explore_frac",
             ),
         )
-        for name in ("confirm_repeats", "fire_out_looks", "fire_robots_min", "frontier_min_cells"):
+        for name in (
+            "confirm_repeats",
+            "fire_out_looks",
+            "victim_out_looks",
+            "fire_robots_min",
+            "frontier_min_cells",
+        ):
             if int(getattr(self, name)) < 1:
                 raise InputError(f"tactics.{name} must be >= 1, got {getattr(self, name)}")
         if self.fire_robots_max < self.fire_robots_min:

@@ -111,9 +111,18 @@ def _plan(
     k = state.knowledge
     ids, fxy, fext = fires_of(k)
     n_fires = len(ids)
-    open_v = np.flatnonzero(~k.victim_confirmed)
+    open_v = np.flatnonzero(~k.victim_confirmed & ~k.dismissed(params))
     task_xy = np.vstack([fxy, k.victim_xy_m[open_v]])
-    demand = np.concatenate([fire_demand(fext, params), np.ones(len(open_v), dtype=np.int64)])
+    need = fire_demand(fext, params)
+    cm = state.coarse
+    floor = int(cm.floor.sum())
+    if (cm.floor & ~state.covered_coarse).sum() > 0.02 * floor and n_fires:
+        # floor left to search: keep explore_frac of the team exploring
+        n_work = int((working & (state.mode != REFILL)).sum())
+        budget = max(n_work - math.ceil(params.explore_frac * n_work), n_fires)
+        while need.sum() > budget:
+            need[int(np.argmax(need))] -= 1
+    demand = np.concatenate([need, np.ones(len(open_v), dtype=np.int64)])
     is_fire = np.arange(len(task_xy)) < n_fires
     current = np.full(n, -1, dtype=np.int64)
     for i in range(n):
@@ -155,7 +164,6 @@ def _plan(
     free = available & (task_fire < 0) & (task_victim < 0)
     status = state.nav.status
     keep = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
-    cm = state.coarse
     goal_rc = cm.cell_of(np.nan_to_num(state.goal_xy_m, nan=-1e9))
     goal_open = (
         np.isfinite(state.goal_xy_m[:, 0]) & ~state.covered_coarse[goal_rc[:, 0], goal_rc[:, 1]]
