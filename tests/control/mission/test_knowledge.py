@@ -226,3 +226,23 @@ def test_a_victim_looked_at_without_a_person_is_dismissed_until_seen_again() -> 
     for _ in range(2 * P.victim_out_looks):
         k, _ = _update(k, state, looking)
     assert not k.dismissed(P)[0]
+
+
+def test_paths_go_round_a_known_fire() -> None:
+    from dataclasses import replace
+
+    from firefleet.control.mission._step import _fire_costmap
+    from firefleet.control.navigation import astar
+
+    state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
+    k, _ = _update(empty_knowledge(), state, np.array([[1.0, 9.0, 0.0]]), fires=[[6.0, 5.0]])
+    start, goal = np.array([2.0, 5.0]), np.array([10.0, 5.0])
+    plain = astar(state.nav.costmap, start, goal).xy_m
+    assert plain is not None
+    assert np.hypot(*(plain - [6.0, 5.0]).T).min() < 0.1  # straight through it
+    hot = _fire_costmap(replace(state, knowledge=k), P).nav.costmap
+    around = astar(hot, start, goal).xy_m
+    assert around is not None
+    assert np.hypot(*(around - [6.0, 5.0]).T).min() >= P.fire_keepout_m - 0.05
+    # nothing is blocked: a robot standing in the fire can still leave
+    assert np.array_equal(hot.blocked, state.nav.costmap.blocked)

@@ -73,6 +73,10 @@ class TacticsParams:
     explore_frac : float
         While floor is left uncovered, at least this fraction of the working robots
         (rounded up) keeps exploring: the fires' demands are cut to leave them.
+    fire_keepout_m : float
+        Paths are priced higher within this distance of a burning spot [m].
+    fire_cost : float
+        Extra planning cost per metre there (the map's free cells cost 1 per metre).
     robot_per_fire_m : float
         A fire needs one robot more per this many metres of its extent's radius.
     fire_robots_min, fire_robots_max : int
@@ -133,6 +137,8 @@ class TacticsParams:
     fire_out_looks: int = 9
     victim_out_looks: int = 18
     explore_frac: float = 0.3
+    fire_keepout_m: float = 1.5
+    fire_cost: float = 20.0
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -188,6 +194,8 @@ class TacticsParams:
                 "keep_bonus_m",
                 "probe_m",
                 "explore_frac",
+                "fire_keepout_m",
+                "fire_cost",
             ),
         )
         for name in (

@@ -31,7 +31,12 @@ from firefleet.control.mission._plan import (
 )
 from firefleet.control.mission._ring import ring_slots
 from firefleet.control.mission._team import TacticsState
-from firefleet.control.navigation import NavigationInputs, navigation_retarget, navigation_step
+from firefleet.control.navigation import (
+    Costmap,
+    NavigationInputs,
+    navigation_retarget,
+    navigation_step,
+)
 from firefleet.errors import InputError, as_float_array
 
 __all__ = ["tactics_step"]
@@ -99,6 +104,37 @@ def _fight_goals(
         )
 
 
+def _fire_costmap(state: TacticsState, params: TacticsParams) -> TacticsState:
+    """The navigation costmap with ``fire_cost`` per metre added within
+    ``fire_keepout_m`` of every burning spot (A* goes round fires where it can; no
+    cell is blocked, so a robot near a fire can always leave)."""
+    base = state.base_costmap
+    spots = state.knowledge.spot_xy_m
+    if len(spots) == 0:
+        if state.nav.costmap is base:
+            return state
+        return replace(state, nav=replace(state.nav, costmap=base))
+    grid = base.grid
+    res = grid.resolution_m
+    h, w = grid.shape
+    k = math.ceil(params.fire_keepout_m / res) + 1
+    near = np.zeros(grid.shape, dtype=bool)
+    for xy in spots:
+        r, c = (int(v) for v in grid.cell_of(xy))
+        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
+        if r0 >= r1 or c0 >= c1:
+            continue
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        centres = grid.center_of(np.stack([rr, cc], axis=-1))
+        near[r0:r1, c0:c1] |= (
+            np.hypot(centres[..., 0] - xy[0], centres[..., 1] - xy[1]) <= params.fire_keepout_m
+        )
+    cost = np.where(near, base.cost + params.fire_cost, base.cost)
+    cost.setflags(write=False)
+    costmap = Costmap(base.grid, base.clearance_m, base.blocked, cost, base.inflation_m)
+    return replace(state, nav=replace(state.nav, costmap=costmap))
+
+
 def _plan(
     state: TacticsState,
     pose: FloatArray,
@@ -107,6 +143,7 @@ def _plan(
     params: TacticsParams,
 ) -> TacticsState:
     """Allocate fires and victims, then frontiers to the robots left (``_plan`` notes)."""
+    state = _fire_costmap(state, params)
     n = len(pose)
     k = state.knowledge
     ids, fxy, fext = fires_of(k)

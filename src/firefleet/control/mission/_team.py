@@ -11,7 +11,7 @@ from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap, coarse_map
 from firefleet.control.mission._knowledge import Knowledge, empty_knowledge, fires_of
 from firefleet.control.mission._params import EXPLORE, Orders, TacticsParams
-from firefleet.control.navigation import NavigationState, navigation_init
+from firefleet.control.navigation import Costmap, NavigationState, navigation_init
 from firefleet.errors import InputError, as_float_array
 from firefleet.world import OccupancyGrid
 
@@ -68,6 +68,10 @@ class TacticsState:
         assignment after each allocation).
     memo : dict of int to ndarray
         A cache of travel-distance fields by source cell (changes no result).
+    base_costmap : Costmap
+        The map's navigation costmap without the fires (``nav.costmap`` adds
+        ``fire_cost`` per metre within ``fire_keepout_m`` of every burning spot, so that
+        paths go round fires where there is another way).
     t_s : float
         Time of the last step [s].
     """
@@ -95,6 +99,7 @@ class TacticsState:
     orders: Orders
     messages_sent: int
     memo: dict[int, FloatArray]
+    base_costmap: Costmap
     t_s: float
 
     @property
@@ -250,5 +255,6 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         orders=orders,
         messages_sent=0,
         memo={},
+        base_costmap=nav.costmap,
         t_s=-np.inf,
     )
