@@ -8,7 +8,9 @@ from firefleet.control.mission import MODES, TacticsParams
 from tests.control.mission._harness import World
 from tests.control.mission.test_team import FAST_NAV, room
 
-FIGHT, REFILL, DAMAGED = (MODES.index(m) for m in ("fight", "refill", "damaged"))
+FIGHT, REFILL, DAMAGED, EXPLORE = (
+    MODES.index(m) for m in ("fight", "refill", "damaged", "explore")
+)
 FIRE = np.array([[6.0, 5.0]])
 
 
@@ -25,7 +27,9 @@ def test_four_robots_ring_a_fire_at_the_regular_spacing() -> None:
     """A fire needing 4 robots: they stand on the ring of radius standoff about it at
     90 deg +- 6 deg from each other (the regular law's polygon), distance +- 0.12 m,
     facing it and spraying."""
-    p = TacticsParams(nav=FAST_NAV, fire_robots_min=4, fire_robots_max=4, sensing_range_m=6.0)
+    p = TacticsParams(
+        nav=FAST_NAV, fire_robots_min=4, fire_robots_max=4, sensing_range_m=6.0, explore_frac=0.0
+    )
     start = np.array([[1.5, y, 0.0] for y in (3.5, 4.5, 5.5, 6.5)])
     world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
     team = np.arange(4)
@@ -77,7 +81,9 @@ def test_an_empty_tank_goes_to_refill_and_comes_back() -> None:
 
 
 def test_a_damaged_robots_task_is_reassigned() -> None:
-    p = TacticsParams(nav=FAST_NAV, fire_robots_min=2, fire_robots_max=2, sensing_range_m=6.0)
+    p = TacticsParams(
+        nav=FAST_NAV, fire_robots_min=2, fire_robots_max=2, sensing_range_m=6.0, explore_frac=0.0
+    )
     start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0], [1.5, 8.5, 0.0]])
     world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
     world.run(
@@ -135,3 +141,22 @@ def test_victims_are_confirmed_from_within_2_m_and_the_fire_goes_out() -> None:
         k = round(t / world.dt_s)
         poses = world.log[k]["pose"]
         assert np.hypot(*(poses[:, :2] - truth).T).min() <= p.confirm_radius_m
+
+
+def test_a_third_of_the_team_keeps_exploring_while_floor_is_unsearched() -> None:
+    """A fire asking for all 3 robots gets 2 while the room is not covered: ceil(0.3 x 3)
+    = 1 explores; with explore_frac = 0 it gets all 3."""
+    start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0], [1.5, 6.5, 0.0]])
+    for frac, fighters in ((0.3, 2), (0.0, 3)):
+        p = TacticsParams(
+            nav=FAST_NAV,
+            fire_robots_min=3,
+            fire_robots_max=3,
+            sensing_range_m=6.0,
+            explore_frac=frac,
+        )
+        world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
+        world.run(3.0)
+        assert world.state.explored_frac < 0.9
+        assert int((world.state.task_fire >= 0).sum()) == fighters
+        assert int((world.state.mode == EXPLORE).sum()) == 3 - fighters

@@ -202,3 +202,47 @@ def test_bad_input_names_the_key() -> None:
         tactics_step(state, _obs(1, tank_l=np.zeros(3)), P, 0.01)
     with pytest.raises(InputError, match="dt_s"):
         tactics_step(state, _obs(1), P, 0.0)
+
+
+def test_a_victim_looked_at_without_a_person_is_dismissed_until_seen_again() -> None:
+    state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
+    ghost = [[6.0, 5.0]]
+    k, _ = _update(empty_knowledge(), state, np.array([[2.0, 5.0, 0.0]]), people=ghost)
+    looking = np.array([[3.0, 5.0, 0.0]])  # 3 m away, facing it, nothing there
+    for _ in range(P.victim_out_looks - 1):
+        k, changed = _update(k, state, looking)
+        assert not changed
+    assert not k.dismissed(P)[0]
+    k, changed = _update(k, state, looking)
+    assert changed
+    assert k.dismissed(P)[0]
+    k, changed = _update(k, state, looking, people=ghost)  # a person there after all
+    assert changed
+    assert not k.dismissed(P)[0]
+    # a confirmed victim is never dismissed
+    k, _ = _update(empty_knowledge(), state, np.array([[5.0, 5.0, 0.0]]), people=ghost)
+    k, _ = _update(k, state, np.array([[5.0, 5.0, 0.0]]), people=ghost)
+    assert k.victim_confirmed[0]
+    for _ in range(2 * P.victim_out_looks):
+        k, _ = _update(k, state, looking)
+    assert not k.dismissed(P)[0]
+
+
+def test_paths_go_round_a_known_fire() -> None:
+    from dataclasses import replace
+
+    from firefleet.control.mission._step import _fire_costmap
+    from firefleet.control.navigation import astar
+
+    state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
+    k, _ = _update(empty_knowledge(), state, np.array([[1.0, 9.0, 0.0]]), fires=[[6.0, 5.0]])
+    start, goal = np.array([2.0, 5.0]), np.array([10.0, 5.0])
+    plain = astar(state.nav.costmap, start, goal).xy_m
+    assert plain is not None
+    assert np.hypot(*(plain - [6.0, 5.0]).T).min() < 0.1  # straight through it
+    hot = _fire_costmap(replace(state, knowledge=k), P).nav.costmap
+    around = astar(hot, start, goal).xy_m
+    assert around is not None
+    assert np.hypot(*(around - [6.0, 5.0]).T).min() >= P.fire_keepout_m - 0.05
+    # nothing is blocked: a robot standing in the fire can still leave
+    assert np.array_equal(hot.blocked, state.nav.costmap.blocked)

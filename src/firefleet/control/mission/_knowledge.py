@@ -52,6 +52,10 @@ class Knowledge:
         Detections of each from within ``confirm_radius_m``.
     victim_confirmed_s : ndarray, shape (V,)
         When each was confirmed [s] (NaN: not yet).
+    victim_misses : ndarray of int, shape (V,)
+        Looks in a row at each (in a camera's cone, in range, in sight) that saw no
+        person there; an unconfirmed victim with ``victim_out_looks`` of them is
+        dismissed (a false detection: hot gas at a door) until detected again.
     """
 
     spot_xy_m: FloatArray
@@ -62,11 +66,17 @@ class Knowledge:
     victim_hits: IntArray
     victim_close: IntArray
     victim_confirmed_s: FloatArray
+    victim_misses: IntArray
 
     @property
     def victim_confirmed(self) -> BoolArray:
         """Whether each victim is confirmed, shape (V,)."""
         out: BoolArray = np.isfinite(self.victim_confirmed_s)
+        return out
+
+    def dismissed(self, params: TacticsParams) -> BoolArray:
+        """Unconfirmed victims dismissed as false detections, shape (V,)."""
+        out: BoolArray = ~self.victim_confirmed & (self.victim_misses >= params.victim_out_looks)
         return out
 
 
@@ -81,6 +91,7 @@ def empty_knowledge() -> Knowledge:
         victim_hits=np.zeros(0, dtype=np.int64),
         victim_close=np.zeros(0, dtype=np.int64),
         victim_confirmed_s=np.zeros(0),
+        victim_misses=np.zeros(0, dtype=np.int64),
     )
 
 
@@ -155,9 +166,17 @@ def _add_person(
             new = bool(~np.isfinite(conf[j]) and near[j] >= params.confirm_repeats)
             if new:
                 conf[j] = t_s
+            misses = k.victim_misses.copy()
+            back = bool(misses[j] >= params.victim_out_looks)
+            misses[j] = 0
             return replace(
-                k, victim_xy_m=xy, victim_hits=hits, victim_close=near, victim_confirmed_s=conf
-            ), new
+                k,
+                victim_xy_m=xy,
+                victim_hits=hits,
+                victim_close=near,
+                victim_confirmed_s=conf,
+                victim_misses=misses,
+            ), new or back
     conf_s = t_s if close and params.confirm_repeats <= 1 else math.nan
     return replace(
         k,
@@ -165,6 +184,7 @@ def _add_person(
         victim_hits=np.append(k.victim_hits, 1),
         victim_close=np.append(k.victim_close, int(close)),
         victim_confirmed_s=np.append(k.victim_confirmed_s, conf_s),
+        victim_misses=np.append(k.victim_misses, 0),
     ), True
 
 
@@ -240,4 +260,45 @@ def update_knowledge(
                     spot_misses=misses[keep],
                 )
                 changed |= len(np.unique(k.spot_fire)) != before
+    if len(k.victim_xy_m) and looked.any():
+        k, c = _victim_looks(k, cm, pose, person_xy, looked, params)
+        changed |= c
     return k, changed
+
+
+def _victim_looks(
+    k: Knowledge,
+    cm: CoarseMap,
+    pose: FloatArray,
+    person_xy: FloatArray,
+    looked: BoolArray,
+    params: TacticsParams,
+) -> tuple[Knowledge, bool]:
+    """Unconfirmed victims looked at without a person detection near them: one miss
+    each; True when one was dismissed."""
+    open_ = ~k.victim_confirmed
+    if not open_.any():
+        return k, False
+    lookers = np.flatnonzero(looked)
+    vic = k.victim_xy_m
+    dx = vic[None, :, 0] - pose[lookers, None, 0]
+    dy = vic[None, :, 1] - pose[lookers, None, 1]
+    off = np.abs((np.arctan2(dy, dx) - pose[lookers, None, 2] + np.pi) % (2 * np.pi) - np.pi)
+    in_cone = (np.hypot(dx, dy) <= params.sensing_range_m) & (off <= 0.5 * params.hfov_rad)
+    in_cone &= open_[None, :]
+    if not in_cone.any():
+        return k, False
+    li, vi = np.nonzero(in_cone)
+    ok = line_of_sight(cm, pose[lookers[li], :2], vic[vi])
+    seen = np.zeros(len(vic), dtype=bool)
+    seen[vi[ok]] = True
+    if len(person_xy):
+        d = np.hypot(
+            vic[:, None, 0] - person_xy[None, :, 0], vic[:, None, 1] - person_xy[None, :, 1]
+        )
+        seen &= d.min(axis=1) > params.victim_merge_m
+    if not seen.any():
+        return k, False
+    misses = k.victim_misses + seen
+    dismissed = (misses == params.victim_out_looks) & seen
+    return replace(k, victim_misses=misses), bool(dismissed.any())

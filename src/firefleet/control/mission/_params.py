@@ -67,6 +67,16 @@ class TacticsParams:
     fire_out_looks : int
         Thermal frames in a row that look at a believed fire's spot (in the cone, in
         range, in line of sight) without detecting fire before the spot is believed out.
+    victim_out_looks : int
+        Looks in a row that see no person where an unconfirmed victim is believed
+        before it is dismissed as a false detection (until detected again).
+    explore_frac : float
+        While floor is left uncovered, at least this fraction of the working robots
+        (rounded up) keeps exploring: the fires' demands are cut to leave them.
+    fire_keepout_m : float
+        Paths are priced higher within this distance of a burning spot [m].
+    fire_cost : float
+        Extra planning cost per metre there (the map's free cells cost 1 per metre).
     robot_per_fire_m : float
         A fire needs one robot more per this many metres of its extent's radius.
     fire_robots_min, fire_robots_max : int
@@ -89,8 +99,13 @@ class TacticsParams:
         farther cost their straight-line distance times ``detour_factor``.
     detour_factor : float
         Straight-line distance multiplier for frontiers past ``travel_limit_m``.
+    probe_m : float
+        An explorer's goal lies up to this far past its frontier, into the uncovered
+        floor [m] (0: on the frontier).
     burgard_beta : float
         Weight of travel cost against utility in Burgard's frontier choice [1/m].
+    stall_s : float
+        An explorer that comes no closer to its goal in this time gives it up [s].
     scan_omega_rad_s : float
         Turn rate of a robot that reached its frontier and looks around [rad/s].
     face_gain : float
@@ -120,6 +135,10 @@ class TacticsParams:
     fire_merge_m: float = 1.0
     victim_merge_m: float = 1.0
     fire_out_looks: int = 9
+    victim_out_looks: int = 18
+    explore_frac: float = 0.3
+    fire_keepout_m: float = 1.5
+    fire_cost: float = 20.0
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -128,9 +147,11 @@ class TacticsParams:
     coverage_period_s: float = 0.25
     nav_period_s: float = 0.1
     plan_cell_m: float = 0.25
-    travel_limit_m: float = 25.0
+    travel_limit_m: float = 15.0
     detour_factor: float = 1.5
+    probe_m: float = 0.75
     burgard_beta: float = 0.02
+    stall_s: float = 10.0
     scan_omega_rad_s: float = 1.0
     face_gain: float = 2.0
     keep_bonus_m: float = 2.0
@@ -163,11 +184,27 @@ class TacticsParams:
                 "travel_limit_m",
                 "detour_factor",
                 "scan_omega_rad_s",
+                "stall_s",
                 "face_gain",
             ),
-            non_negative=("low_tank_frac", "low_tank_penalty_m", "burgard_beta", "keep_bonus_m"),
+            non_negative=(
+                "low_tank_frac",
+                "low_tank_penalty_m",
+                "burgard_beta",
+                "keep_bonus_m",
+                "probe_m",
+                "explore_frac",
+                "fire_keepout_m",
+                "fire_cost",
+            ),
         )
-        for name in ("confirm_repeats", "fire_out_looks", "fire_robots_min", "frontier_min_cells"):
+        for name in (
+            "confirm_repeats",
+            "fire_out_looks",
+            "victim_out_looks",
+            "fire_robots_min",
+            "frontier_min_cells",
+        ):
             if int(getattr(self, name)) < 1:
                 raise InputError(f"tactics.{name} must be >= 1, got {getattr(self, name)}")
         if self.fire_robots_max < self.fire_robots_min:

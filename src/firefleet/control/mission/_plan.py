@@ -158,6 +158,7 @@ def explore(
     explorers: BoolArray,
     target_cell: IntArray,
     keep: BoolArray,
+    goal_open: BoolArray,
     excluded: BoolArray,
     params: TacticsParams,
 ) -> IntArray:
@@ -174,7 +175,10 @@ def explore(
     target_cell : ndarray of int, shape (N, 2)
         Their targets so far (-1: none).
     keep : ndarray of bool, shape (N,)
-        Explorers that may keep a target still on a frontier (still on their way).
+        Explorers still on their way: they keep a target still on a frontier, or any
+        target while ``goal_open`` (their goal not yet covered).
+    goal_open : ndarray of bool, shape (N,)
+        Explorers whose goal cell is not covered yet.
     excluded : ndarray of bool, shape (Hc, Wc)
         Cells never to be chosen (found unreachable).
     params : TacticsParams
@@ -194,10 +198,13 @@ def explore(
     choose = []
     for i in map(int, np.flatnonzero(explorers)):
         r, c = target_cell[i]
-        lab = int(seg[r, c]) if r >= 0 and keep[i] else -1
+        keep_i = bool(keep[i]) and r >= 0 and not excluded[r, c]
+        lab = int(seg[r, c]) if keep_i else -1
         if lab >= 0 and lab not in held:
             held.append(lab)
             out[i] = targets[lab]
+        elif keep_i and goal_open[i] and lab < 0:
+            out[i] = target_cell[i]  # off the frontier now, its goal still unseen
         else:
             choose.append(i)
     who = np.asarray(choose, dtype=np.int64)
@@ -215,7 +222,7 @@ def explore(
         kept: list[int] = []
         for i in who:
             r, c = target_cell[i]
-            lab = int(inner_seg[r, c]) if r >= 0 and keep[i] else -1
+            lab = int(inner_seg[r, c]) if r >= 0 and keep[i] and not excluded[r, c] else -1
             if lab >= 0 and lab not in kept:
                 kept.append(lab)
                 out[i] = inner[lab]
@@ -223,6 +230,38 @@ def explore(
         if len(inner) and len(who):
             pick = _choose(cm, pose[who], inner, np.asarray(kept, dtype=np.int64), params)
             out[who[pick >= 0]] = inner[pick[pick >= 0]]
+    return out
+
+
+def probe(cm: CoarseMap, covered: BoolArray, cells: IntArray, probe_m: float) -> IntArray:
+    """Goals a little past frontier cells (M, 2), into the floor not yet covered.
+
+    From each cell, along the mean direction to the uncovered floor cells within
+    ``probe_m``, the farthest standable cell within ``probe_m`` reached without crossing
+    an opaque or unstandable one (the cell itself when none is uncovered near it): the
+    robot goes into the room it is to look at, not just to its door.
+    """
+    out = np.array(cells, dtype=np.int64).reshape(-1, 2)
+    k = max(1, round(probe_m / cm.cell_m))
+    hc, wc = cm.shape
+    todo = cm.floor & ~covered
+    for m, (r, c) in enumerate(out.tolist()):
+        if r < 0:
+            continue
+        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, hc), max(c - k, 0), min(c + k + 1, wc)
+        rc = np.argwhere(todo[r0:r1, c0:c1]) + np.array([r0, c0])
+        if len(rc) == 0:
+            continue
+        u = rc.mean(axis=0) - (r, c)
+        norm = float(np.hypot(u[0], u[1]))
+        if norm < 1e-9:
+            continue
+        u = u / norm
+        for step in range(1, k + 1):
+            rr, cc = round(r + step * u[0]), round(c + step * u[1])
+            if not (0 <= rr < hc and 0 <= cc < wc) or cm.opaque[rr, cc] or not cm.standable[rr, cc]:
+                break
+            out[m] = (rr, cc)
     return out
 
 

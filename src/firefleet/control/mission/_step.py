@@ -21,10 +21,22 @@ from firefleet.control.mission._params import (
     TacticsObservation,
     TacticsParams,
 )
-from firefleet.control.mission._plan import _empty_l, allocate, explore, fire_demand, task_distances
+from firefleet.control.mission._plan import (
+    _empty_l,
+    allocate,
+    explore,
+    fire_demand,
+    probe,
+    task_distances,
+)
 from firefleet.control.mission._ring import ring_slots
 from firefleet.control.mission._team import TacticsState
-from firefleet.control.navigation import NavigationInputs, navigation_retarget, navigation_step
+from firefleet.control.navigation import (
+    Costmap,
+    NavigationInputs,
+    navigation_retarget,
+    navigation_step,
+)
 from firefleet.errors import InputError, as_float_array
 
 __all__ = ["tactics_step"]
@@ -61,7 +73,11 @@ def _retarget(state: TacticsState, goals: FloatArray, pose: FloatArray) -> Tacti
         return replace(state, goal_xy_m=goals)
     nav_goal = np.where(fin[:, None], goals, pose[:, :2])
     nav = navigation_retarget(state.nav, nav_goal, moved)
-    return replace(state, nav=nav, goal_xy_m=goals)
+    closest = state.closest_m.copy()
+    closest[moved] = np.inf
+    since = state.closest_s.copy()
+    since[moved] = max(state.t_s, 0.0)
+    return replace(state, nav=nav, goal_xy_m=goals, closest_m=closest, closest_s=since)
 
 
 def _fight_goals(
@@ -88,6 +104,37 @@ def _fight_goals(
         )
 
 
+def _fire_costmap(state: TacticsState, params: TacticsParams) -> TacticsState:
+    """The navigation costmap with ``fire_cost`` per metre added within
+    ``fire_keepout_m`` of every burning spot (A* goes round fires where it can; no
+    cell is blocked, so a robot near a fire can always leave)."""
+    base = state.base_costmap
+    spots = state.knowledge.spot_xy_m
+    if len(spots) == 0:
+        if state.nav.costmap is base:
+            return state
+        return replace(state, nav=replace(state.nav, costmap=base))
+    grid = base.grid
+    res = grid.resolution_m
+    h, w = grid.shape
+    k = math.ceil(params.fire_keepout_m / res) + 1
+    near = np.zeros(grid.shape, dtype=bool)
+    for xy in spots:
+        r, c = (int(v) for v in grid.cell_of(xy))
+        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
+        if r0 >= r1 or c0 >= c1:
+            continue
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        centres = grid.center_of(np.stack([rr, cc], axis=-1))
+        near[r0:r1, c0:c1] |= (
+            np.hypot(centres[..., 0] - xy[0], centres[..., 1] - xy[1]) <= params.fire_keepout_m
+        )
+    cost = np.where(near, base.cost + params.fire_cost, base.cost)
+    cost.setflags(write=False)
+    costmap = Costmap(base.grid, base.clearance_m, base.blocked, cost, base.inflation_m)
+    return replace(state, nav=replace(state.nav, costmap=costmap))
+
+
 def _plan(
     state: TacticsState,
     pose: FloatArray,
@@ -96,13 +143,23 @@ def _plan(
     params: TacticsParams,
 ) -> TacticsState:
     """Allocate fires and victims, then frontiers to the robots left (``_plan`` notes)."""
+    state = _fire_costmap(state, params)
     n = len(pose)
     k = state.knowledge
     ids, fxy, fext = fires_of(k)
     n_fires = len(ids)
-    open_v = np.flatnonzero(~k.victim_confirmed)
+    open_v = np.flatnonzero(~k.victim_confirmed & ~k.dismissed(params))
     task_xy = np.vstack([fxy, k.victim_xy_m[open_v]])
-    demand = np.concatenate([fire_demand(fext, params), np.ones(len(open_v), dtype=np.int64)])
+    need = fire_demand(fext, params)
+    cm = state.coarse
+    floor = int(cm.floor.sum())
+    if (cm.floor & ~state.covered_coarse).sum() > 0.02 * floor and n_fires:
+        # floor left to search: keep explore_frac of the team exploring
+        n_work = int((working & (state.mode != REFILL)).sum())
+        budget = max(n_work - math.ceil(params.explore_frac * n_work), n_fires)
+        while need.sum() > budget:
+            need[int(np.argmax(need))] -= 1
+    demand = np.concatenate([need, np.ones(len(open_v), dtype=np.int64)])
     is_fire = np.arange(len(task_xy)) < n_fires
     current = np.full(n, -1, dtype=np.int64)
     for i in range(n):
@@ -144,18 +201,25 @@ def _plan(
     free = available & (task_fire < 0) & (task_victim < 0)
     status = state.nav.status
     keep = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
+    goal_rc = cm.cell_of(np.nan_to_num(state.goal_xy_m, nan=-1e9))
+    goal_open = (
+        np.isfinite(state.goal_xy_m[:, 0]) & ~state.covered_coarse[goal_rc[:, 0], goal_rc[:, 1]]
+    )
     cells = explore(
-        state.coarse,
+        cm,
         state.covered_coarse,
         pose,
         free,
         state.explore_cell,
         keep,
+        goal_open,
         state.excluded,
         params,
     )
     has = free & (cells[:, 0] >= 0)
-    goals[has] = state.coarse.goal_xy(cells[has])
+    same = has & np.all(cells == state.explore_cell, axis=1) & keep
+    fresh = has & ~same
+    goals[fresh] = cm.goal_xy(probe(cm, state.covered_coarse, cells[fresh], params.probe_m))
     mode[has] = EXPLORE
     idle = free & ~has
     goals[idle] = np.nan
@@ -183,6 +247,18 @@ def _orders(
     # arrived, or stopped short for good (its goal blocked or out of reach)
     at_goal = np.array([s != "moving" and s != "waiting" for s in nav.status])
     arrived = at_goal
+    # a fighter or confirmer that has come no closer to its spot in stall_s settles
+    # where it is (navigation told it has arrived, so that no teammate waits for it)
+    # (a refiller too, if that is within refill_radius_m of its spot)
+    d = np.hypot(pose[:, 0] - state.goal_xy_m[:, 0], pose[:, 1] - state.goal_xy_m[:, 1])
+    settle = (
+        ((mode == FIGHT) | (mode == CONFIRM) | ((mode == REFILL) & (d <= params.refill_radius_m)))
+        & ~at_goal
+        & (obs.t_s - state.closest_s >= params.stall_s)
+    )
+    if settle.any():
+        nav = navigation_retarget(nav, pose[:, :2], settle)
+        at_goal = at_goal | settle
     w_max = params.nav.dwa.omega_max_rad_s
     spray = np.zeros(n, dtype=bool)
     ids, fxy, _ = fires_of(state.knowledge)
@@ -295,6 +371,33 @@ def _dropped(state: TacticsState, pose: FloatArray, lost: BoolArray) -> TacticsS
     return replace(new, nav=nav)
 
 
+def _watchdog(
+    state: TacticsState, pose: FloatArray, t: float, params: TacticsParams
+) -> TacticsState:
+    """Explorers that neither reach their goal nor come 0.2 m closer to it in
+    ``stall_s`` (or stand within the goal tolerance of it without navigation calling
+    it reached) give their frontier up; the team re-plans."""
+    goal = state.goal_xy_m
+    d = np.hypot(pose[:, 0] - goal[:, 0], pose[:, 1] - goal[:, 1])
+    better = np.isfinite(d) & (d < state.closest_m - 0.2)
+    closest = np.where(better, d, state.closest_m)
+    since = np.where(better, t, state.closest_s)
+    explorers = state.mode == EXPLORE
+    stalled = explorers & np.isfinite(d) & (t - since >= params.stall_s)
+    near = explorers & (d <= params.nav.goal_tolerance_m)
+    if not (stalled.any() or near.any()):
+        return replace(state, closest_m=closest, closest_s=since)
+    excluded = state.excluded
+    if stalled.any():
+        excluded = excluded.copy()
+        for i in map(int, np.flatnonzero(stalled)):
+            for rc in (state.explore_cell[i], state.coarse.cell_of(goal[i])):
+                if rc[0] >= 0:
+                    excluded[rc[0], rc[1]] = True
+        since = np.where(stalled, t, since)
+    return replace(state, closest_m=closest, closest_s=since, excluded=excluded, pending=True)
+
+
 def tactics_step(
     state: TacticsState, obs: TacticsObservation, params: TacticsParams, dt_s: float
 ) -> tuple[TacticsState, Orders]:
@@ -402,6 +505,7 @@ def tactics_step(
             state = replace(state, excluded=excluded, pending=True)
         if any(status[i] == "arrived" for i in explorers):
             state = replace(state, pending=True)
+        state = _watchdog(state, pose, t, params)
     since = t - state.last_plan_s
     if (state.pending and since >= params.replan_s) or since >= params.explore_replan_s:
         state = _plan(state, pose, tank, working, params)

@@ -11,7 +11,7 @@ from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap, coarse_map
 from firefleet.control.mission._knowledge import Knowledge, empty_knowledge, fires_of
 from firefleet.control.mission._params import EXPLORE, Orders, TacticsParams
-from firefleet.control.navigation import NavigationState, navigation_init
+from firefleet.control.navigation import Costmap, NavigationState, navigation_init
 from firefleet.errors import InputError, as_float_array
 from firefleet.world import OccupancyGrid
 
@@ -53,6 +53,10 @@ class TacticsState:
         ``refill_l_s`` (up to ``tank_l``) while this holds.
     known_damaged : ndarray of bool, shape (N,)
         Robots the team has dropped (damaged or dead).
+    closest_m, closest_s : ndarray, shape (N,)
+        The stall watchdog: each robot's least distance to its goal so far [m], and
+        when it last came 0.2 m closer [s]. An explorer that has not for ``stall_s``
+        gives its frontier up (it joins ``excluded``) and the team re-plans.
     pending : bool
         A detection or a robot's state changed since the last allocation.
     last_plan_s, next_coverage_s, next_nav_s : float
@@ -64,6 +68,10 @@ class TacticsState:
         assignment after each allocation).
     memo : dict of int to ndarray
         A cache of travel-distance fields by source cell (changes no result).
+    base_costmap : Costmap
+        The map's navigation costmap without the fires (``nav.costmap`` adds
+        ``fire_cost`` per metre within ``fire_keepout_m`` of every burning spot, so that
+        paths go round fires where there is another way).
     t_s : float
         Time of the last step [s].
     """
@@ -82,6 +90,8 @@ class TacticsState:
     refill_spots_m: FloatArray
     refilling: BoolArray
     known_damaged: BoolArray
+    closest_m: FloatArray
+    closest_s: FloatArray
     pending: bool
     last_plan_s: float
     next_coverage_s: float
@@ -89,6 +99,7 @@ class TacticsState:
     orders: Orders
     messages_sent: int
     memo: dict[int, FloatArray]
+    base_costmap: Costmap
     t_s: float
 
     @property
@@ -235,6 +246,8 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         refill_spots_m=spots,
         refilling=np.zeros(n, dtype=bool),
         known_damaged=np.zeros(n, dtype=bool),
+        closest_m=np.full(n, np.inf),
+        closest_s=np.zeros(n),
         pending=True,
         last_plan_s=-np.inf,
         next_coverage_s=-np.inf,
@@ -242,5 +255,6 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         orders=orders,
         messages_sent=0,
         memo={},
+        base_costmap=nav.costmap,
         t_s=-np.inf,
     )
