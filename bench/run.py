@@ -43,6 +43,7 @@ TOPICS = (
     "net",
     "link",
     "navigation",
+    "mission",
 )
 ISSUE_12: tuple[tuple[str, h.Op, float], ...] = (
     ("motor.single.speedup_vs_python_control", ">=", 100.0),
