@@ -75,9 +75,9 @@ def _timed(spent: dict[str, float]) -> Iterator[None]:
         (RangeSensors, "read", RangeSensors.read),
         (sensors, "render_thermal_grid_depth", sensors.render_thermal_grid_depth),
         (mw, "detect", mw.detect),
-        (cstep, "navigation_step", cstep.navigation_step),
+        (cstep, "navigation_step", vars(cstep)["navigation_step"]),
         (cm, "tactics_step", cm.tactics_step),
-        (loop, "drive_step", loop.drive_step),
+        (loop, "drive_step", vars(loop)["drive_step"]),
     ]
     names = ("world", "ranging", "render", "detect", "navigation", "tactics_all", "drive")
     try:
@@ -107,8 +107,6 @@ def measure(name: str, duration_s: float) -> tuple[float, dict[str, float]]:
 
 def run(console: Console) -> TopicResult:
     """The rows, the floor and the split table."""
-    import firefleet
-
     measure("mission-office", 2.0)  # compiled kernels loaded, caches warm
     wall_s, spent = measure("mission-office", OFFICE_S)
     x_real = OFFICE_S / wall_s
