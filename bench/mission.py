@@ -74,7 +74,7 @@ def _timed(spent: dict[str, float]) -> Iterator[None]:
         (mw.MissionWorld, "step", mw.MissionWorld.step),
         (RangeSensors, "read", RangeSensors.read),
         (sensors, "render_thermal_grid_depth", sensors.render_thermal_grid_depth),
-        (mw, "detect", mw.detect),
+        (mw, "detect", vars(mw)["detect"]),
         (cstep, "navigation_step", vars(cstep)["navigation_step"]),
         (cm, "tactics_step", cm.tactics_step),
         (loop, "drive_step", vars(loop)["drive_step"]),
