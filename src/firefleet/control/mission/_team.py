@@ -112,9 +112,11 @@ class TacticsState:
 
     @property
     def explored_frac(self) -> float:
-        """Fraction of the map's free cells covered (0 to 1)."""
-        free = np.asarray(self.coarse.grid.free)
-        return float((self.covered & free).sum() / max(int(free.sum()), 1))
+        """Fraction of the map's free cells covered (0 to 1): the free map cells of the
+        covered coarse cells (equal to ``(covered & grid.free).sum() / grid.free.sum()``,
+        without building the map-sized array)."""
+        count = self.coarse.free_count
+        return float(count[self.covered_coarse].sum() / max(int(count.sum()), 1))
 
     @property
     def fires_xy_m(self) -> FloatArray:
