@@ -73,7 +73,8 @@ class TacticsState:
         ``fire_cost`` per metre within ``fire_keepout_m`` of every burning spot, so that
         paths go round fires where there is another way).
     t_s : float
-        Time of the last step [s].
+        Time of the last step that changed anything [s] (a quiet tick returns the state
+        as it was).
     """
 
     coarse: CoarseMap
