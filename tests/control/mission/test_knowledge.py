@@ -246,3 +246,17 @@ def test_paths_go_round_a_known_fire() -> None:
     assert np.hypot(*(around - [6.0, 5.0]).T).min() >= P.fire_keepout_m - 0.05
     # nothing is blocked: a robot standing in the fire can still leave
     assert np.array_equal(hot.blocked, state.nav.costmap.blocked)
+
+
+def test_explored_fraction_equals_the_map_cells_count() -> None:
+    from dataclasses import replace
+
+    from firefleet.world import load_map
+
+    grid = load_map("office")
+    state = tactics_init(grid, [[1.0, 5.0, 0.0]], P)
+    rng = np.random.default_rng(0)
+    covered = rng.random(state.covered_coarse.shape) < 0.4
+    s = replace(state, covered_coarse=covered)
+    free = np.asarray(grid.free)
+    assert s.explored_frac == pytest.approx((s.covered & free).sum() / free.sum(), abs=1e-12)

@@ -38,7 +38,22 @@ What the team does (:mod:`._plan`):
   ``spray_range_m`` and in sight;
 - *refill*: an empty tank sends its robot to a spot by the refill point; full again, it
   rejoins the allocation (its fire, if it still burns);
-- *damage*: a damaged or dead robot stops, is dropped, and the team re-plans.
+- *damage*: a damaged or dead robot stops, is dropped, and the team re-plans;
+- *safety*: paths cost ``fire_cost`` more per metre within ``fire_keepout_m`` of a
+  burning spot (A* goes round a fire where it can); a victim looked at
+  ``victim_out_looks`` times without a person detection is dismissed as a false one
+  (hot gas at a door) until seen again; while floor is unsearched ``explore_frac`` of
+  the team keeps exploring (a fire's demand is cut to leave them); a robot that comes
+  no closer to its goal in ``stall_s`` gives it up (explorer) or settles (fighter).
+
+The kind's side of the contract: pass ``looked`` (which robots' thermal frames were
+read this tick: only they count against a believed fire or victim), drain each tank
+by ``flow_l_s`` while ``orders.spray``, and fill it by ``refill_l_s`` while
+``state.refilling``.
+
+Cost: the navigation controller (its DWA above all) is most of a tick's cost; a
+lighter window (``DwaParams(n_v=5, n_omega=9, n_steps=8)``) is four times cheaper, and
+on a 100 m floor ``plan_cell_m=0.5`` keeps the coarse grid at 40,000 cells.
 
 Motion is the ``navigate`` kind's: :mod:`firefleet.control.navigation` (A* on the
 inflated map, the fuzzy follower, give way, DWA on the sensed ranges), run every

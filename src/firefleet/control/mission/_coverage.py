@@ -56,6 +56,8 @@ class CoarseMap:
         (-1 elsewhere).
     nearest_standable : ndarray of int, shape (Hc, Wc, 2)
         The standable coarse cell nearest to each coarse cell.
+    free_count : ndarray of int, shape (Hc, Wc)
+        Free map cells in each coarse cell (the explored fraction without the map grid).
     graph : scipy.sparse.csr_matrix, shape (Hc Wc, Hc Wc)
         Travel graph of the standable cells [m].
     """
@@ -69,6 +71,7 @@ class CoarseMap:
     goal_cell: IntArray
     nearest_standable: IntArray
     graph: scipy.sparse.csr_matrix
+    free_count: IntArray
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -145,7 +148,8 @@ def coarse_map(costmap: Costmap, cell_m: float) -> CoarseMap:
     grid = costmap.grid
     f = max(1, round(cell_m / grid.resolution_m))
     opaque: BoolArray = np.any(_blocks(np.asarray(grid.occupied), f, True), axis=-1)
-    floor: BoolArray = np.any(_blocks(np.asarray(grid.free), f, False), axis=-1)
+    free_blocks = _blocks(np.asarray(grid.free), f, False)
+    floor: BoolArray = np.any(free_blocks, axis=-1)
     open_ = _blocks(~np.asarray(costmap.blocked), f, False)
     standable: BoolArray = np.any(open_, axis=-1)
     hc, wc = opaque.shape
@@ -171,6 +175,7 @@ def coarse_map(costmap: Costmap, cell_m: float) -> CoarseMap:
         goal_cell=goal.astype(np.int64),
         nearest_standable=nearest.astype(np.int64),
         graph=grid_graph(standable, f * grid.resolution_m),
+        free_count=free_blocks.sum(axis=-1).astype(np.int64),
     )
 
 

@@ -448,6 +448,7 @@ def tactics_step(
     """
     if not (math.isfinite(dt_s) and dt_s > 0.0):
         raise InputError(f"dt_s must be > 0, got {dt_s!r}")
+    start = state
     n = len(state.mode)
     t = float(obs.t_s)
     pose = as_float_array(obs.pose_m, "obs.pose_m", (n, 3))
@@ -513,4 +514,6 @@ def tactics_step(
     if t >= state.next_nav_s - _EPS_S:
         state = _orders(state, obs, pose, params)
         state = replace(state, next_nav_s=_next(state.next_nav_s, params.nav_period_s, t))
+    if state is start:  # a quiet tick: the held orders, nothing to copy
+        return state, state.orders
     return replace(state, t_s=t), state.orders

@@ -73,7 +73,8 @@ class TacticsState:
         ``fire_cost`` per metre within ``fire_keepout_m`` of every burning spot, so that
         paths go round fires where there is another way).
     t_s : float
-        Time of the last step [s].
+        Time of the last step that changed anything [s] (a quiet tick returns the state
+        as it was).
     """
 
     coarse: CoarseMap
@@ -112,9 +113,11 @@ class TacticsState:
 
     @property
     def explored_frac(self) -> float:
-        """Fraction of the map's free cells covered (0 to 1)."""
-        free = np.asarray(self.coarse.grid.free)
-        return float((self.covered & free).sum() / max(int(free.sum()), 1))
+        """Fraction of the map's free cells covered (0 to 1): the free map cells of the
+        covered coarse cells (equal to ``(covered & grid.free).sum() / grid.free.sum()``,
+        without building the map-sized array)."""
+        count = self.coarse.free_count
+        return float(count[self.covered_coarse].sum() / max(int(count.sum()), 1))
 
     @property
     def fires_xy_m(self) -> FloatArray:
