@@ -62,6 +62,11 @@ def test_the_issue_yaml_validates_as_printed(tmp_path: Path) -> None:
             "world.victims[0]: (30, 3) is off the map",
         ),
         (
+            "victims: [{x_m: 12.0, y_m: 3.0}]",
+            "victims: [{x_m: 4.0, y_m: 2.0}]",
+            "world.victims[0]: (4, 2) is inside a wall",
+        ),
+        (
             "fuel: {default: 1.0}",
             "fuel: {default: 1.0, regions: [{x_m: [30, 40], y_m: [0, 1], load: 2}]}",
             "world.fuel.regions[0]",
@@ -108,6 +113,7 @@ def test_a_run_without_the_team_burns_the_baseline() -> None:
     result = firefleet.simulate(scenario, record_every=100)
     metrics = mission_metrics(result)
     assert metrics["burned_area_m2"] == baseline_burned_area_m2(scenario) > 0.0
+    assert metrics["burned_vs_baseline"] == 1.0
     assert metrics["fires_detected"] == 0.0
     assert not np.any(np.abs(result.pose - result.pose[0]) > 1e-9)  # nobody moved
 
