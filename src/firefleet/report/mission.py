@@ -173,8 +173,10 @@ def animation_gif(result: SimResult, *, frames: int = _FRAMES) -> bytes:
         for i, axi in enumerate(axes):
             axi.axis("off")
             if i < insets:
-                axi.imshow(views[i], cmap="inferno", vmin=15.0, vmax=150.0)
-                axi.set_title(f"robot {i + 1} thermal", fontsize=8, color=colours[i])
+                # one fixed scale, 15-600 C (a Lepton's high-gain range saturates at
+                # 150 C: a robot at a burning room's door saw one flat colour)
+                axi.imshow(views[i], cmap="inferno", vmin=15.0, vmax=600.0)
+                axi.set_title(f"robot {i + 1} thermal, 15-600 C", fontsize=8, color=colours[i])
         images.append(
             Image.open(io.BytesIO(_png(fig, dpi=70))).convert(
                 "P", palette=Image.Palette.ADAPTIVE, colors=96
