@@ -240,12 +240,18 @@ def test_paths_go_round_a_known_fire() -> None:
     plain = astar(state.nav.costmap, start, goal).xy_m
     assert plain is not None
     assert np.hypot(*(plain - [6.0, 5.0]).T).min() < 0.1  # straight through it
-    hot = _fire_costmap(replace(state, knowledge=k), P).nav.costmap
+    hot = _fire_costmap(replace(state, knowledge=k), np.array([[2.0, 5.0, 0.0]]), P).nav.costmap
     around = astar(hot, start, goal).xy_m
     assert around is not None
     assert np.hypot(*(around - [6.0, 5.0]).T).min() >= P.fire_keepout_m - 0.05
-    # nothing is blocked: a robot standing in the fire can still leave
-    assert np.array_equal(hot.blocked, state.nav.costmap.blocked)
+    # blocked within fire_block_m of it, but not round a robot: one standing 0.5 m
+    # from the fire can still plan its way out
+    grid = hot.grid
+    assert hot.blocked[tuple(grid.cell_of([6.0, 5.6]))]
+    near = _fire_costmap(replace(state, knowledge=k), np.array([[6.5, 5.0, 0.0]]), P)
+    assert not near.nav.costmap.blocked[tuple(grid.cell_of([6.5, 5.0]))]
+    out = astar(near.nav.costmap, np.array([6.5, 5.0]), goal)
+    assert out.found
 
 
 def test_explored_fraction_equals_the_map_cells_count() -> None:

@@ -77,6 +77,9 @@ class TacticsParams:
         Paths are priced higher within this distance of a burning spot [m].
     fire_cost : float
         Extra planning cost per metre there (the map's free cells cost 1 per metre).
+    fire_block_m : float
+        Paths never pass within this distance of a burning spot [m] (0: none), except
+        within 1 m of a robot (it can always leave).
     robot_per_fire_m : float
         A fire needs one robot more per this many metres of its extent's radius.
     fire_robots_min, fire_robots_max : int
@@ -139,6 +142,7 @@ class TacticsParams:
     explore_frac: float = 0.3
     fire_keepout_m: float = 1.5
     fire_cost: float = 20.0
+    fire_block_m: float = 0.75
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -196,6 +200,7 @@ class TacticsParams:
                 "explore_frac",
                 "fire_keepout_m",
                 "fire_cost",
+                "fire_block_m",
             ),
         )
         for name in (

@@ -38,6 +38,7 @@ from firefleet.control.navigation import (
     navigation_step,
 )
 from firefleet.errors import InputError, as_float_array
+from firefleet.world import OccupancyGrid
 
 __all__ = ["tactics_step"]
 
@@ -104,10 +105,28 @@ def _fight_goals(
         )
 
 
-def _fire_costmap(state: TacticsState, params: TacticsParams) -> TacticsState:
-    """The navigation costmap with ``fire_cost`` per metre added within
-    ``fire_keepout_m`` of every burning spot (A* goes round fires where it can; no
-    cell is blocked, so a robot near a fire can always leave)."""
+def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArray:
+    """Map cells whose centres lie within ``radius_m`` of any point ``xy`` (M, 2)."""
+    grid_shape = grid.shape
+    h, w = grid_shape
+    k = math.ceil(radius_m / grid.resolution_m) + 1
+    out = np.zeros(grid_shape, dtype=bool)
+    for p in xy:
+        r, c = (int(v) for v in grid.cell_of(p))
+        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
+        if r0 >= r1 or c0 >= c1:
+            continue
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        centres = grid.center_of(np.stack([rr, cc], axis=-1))
+        out[r0:r1, c0:c1] |= np.hypot(centres[..., 0] - p[0], centres[..., 1] - p[1]) <= radius_m
+    return out
+
+
+def _fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -> TacticsState:
+    """The navigation costmap round the fires: ``fire_cost`` more per metre within
+    ``fire_keepout_m`` of every burning spot (A* goes round a fire where it can), and
+    the cells within ``fire_block_m`` of one blocked, except within 1 m of a robot (so a
+    robot near a fire can always plan its way out)."""
     base = state.base_costmap
     spots = state.knowledge.spot_xy_m
     if len(spots) == 0:
@@ -115,23 +134,17 @@ def _fire_costmap(state: TacticsState, params: TacticsParams) -> TacticsState:
             return state
         return replace(state, nav=replace(state.nav, costmap=base))
     grid = base.grid
-    res = grid.resolution_m
-    h, w = grid.shape
-    k = math.ceil(params.fire_keepout_m / res) + 1
-    near = np.zeros(grid.shape, dtype=bool)
-    for xy in spots:
-        r, c = (int(v) for v in grid.cell_of(xy))
-        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
-        if r0 >= r1 or c0 >= c1:
-            continue
-        rr, cc = np.mgrid[r0:r1, c0:c1]
-        centres = grid.center_of(np.stack([rr, cc], axis=-1))
-        near[r0:r1, c0:c1] |= (
-            np.hypot(centres[..., 0] - xy[0], centres[..., 1] - xy[1]) <= params.fire_keepout_m
-        )
+    near = _disc_mask(grid, spots, params.fire_keepout_m)
     cost = np.where(near, base.cost + params.fire_cost, base.cost)
-    cost.setflags(write=False)
-    costmap = Costmap(base.grid, base.clearance_m, base.blocked, cost, base.inflation_m)
+    blocked = np.array(base.blocked)
+    if params.fire_block_m > 0.0:
+        hot = _disc_mask(grid, spots, params.fire_block_m)
+        hot &= ~_disc_mask(grid, pose[:, :2], 1.0)
+        blocked |= hot
+        cost[hot] = np.inf
+    for arr in (cost, blocked):
+        arr.setflags(write=False)
+    costmap = Costmap(base.grid, base.clearance_m, blocked, cost, base.inflation_m)
     return replace(state, nav=replace(state.nav, costmap=costmap))
 
 
@@ -143,7 +156,7 @@ def _plan(
     params: TacticsParams,
 ) -> TacticsState:
     """Allocate fires and victims, then frontiers to the robots left (``_plan`` notes)."""
-    state = _fire_costmap(state, params)
+    state = _fire_costmap(state, pose, params)
     n = len(pose)
     k = state.knowledge
     ids, fxy, fext = fires_of(k)
