@@ -69,8 +69,10 @@ def task_distances(
         fields = cm.distances(np.asarray(todo, dtype=np.int64))
         for n, f in zip(todo, fields, strict=True):
             memo[n] = f
-        while len(memo) > _CACHE_MAX:
-            memo.pop(next(iter(memo)))
+        needed = {int(n) for n in np.unique(nodes)}
+        stale = [k for k in memo if k not in needed]  # oldest first; never this call's
+        for k in stale[: max(0, len(memo) - _CACHE_MAX)]:
+            memo.pop(k)
     robot_nodes = cm.node_of(robot_xy)
     out = np.empty((len(robot_xy), len(task_xy)))
     for j, n in enumerate(nodes):
