@@ -29,6 +29,7 @@ import contextlib
 import dataclasses
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 from rich.console import Console
@@ -36,6 +37,8 @@ from rich.table import Table
 
 from _harness import Floor, Row, TopicResult
 
+OFFICE = Path(__file__).resolve().parent.parent / "examples" / "missions" / "mission-office.yaml"
+"""mission-office, kept in examples/ until its claims pass for seeds 0-4."""
 OFFICE_S = 60.0
 """Simulated seconds of mission-office per timed run."""
 FLOOR_OFFICE_X = 60.0
@@ -89,7 +92,7 @@ def _timed(spent: dict[str, float]) -> Iterator[None]:
             setattr(owner, attr, fn)
 
 
-def measure(name: str, duration_s: float) -> tuple[float, dict[str, float]]:
+def measure(name: str | Path, duration_s: float) -> tuple[float, dict[str, float]]:
     """Wall seconds of ``duration_s`` simulated seconds of the built-in ``name``, and the
     split by part (seconds)."""
     import firefleet
@@ -107,8 +110,8 @@ def measure(name: str, duration_s: float) -> tuple[float, dict[str, float]]:
 
 def run(console: Console) -> TopicResult:
     """The rows, the floor and the split table."""
-    measure("mission-office", 2.0)  # compiled kernels loaded, caches warm
-    wall_s, spent = measure("mission-office", OFFICE_S)
+    measure(OFFICE, 2.0)  # compiled kernels loaded, caches warm
+    wall_s, spent = measure(OFFICE, OFFICE_S)
     x_real = OFFICE_S / wall_s
     row = Row(
         "mission.office.x_real_time", x_real, "x real time", label="mission-office (3 robots)"

@@ -100,7 +100,10 @@ def test_bad_mission_input_is_one_line_exit_2(
     assert says in lines[0]
 
 
-def _short(name: str, duration_s: float, **command: object) -> firefleet.Scenario:
+OFFICE = Path(__file__).resolve().parents[2] / "examples" / "missions" / "mission-office.yaml"
+
+
+def _short(name: Path, duration_s: float, **command: object) -> firefleet.Scenario:
     scenario = firefleet.load_scenario(name)
     replace: Any = dataclasses.replace
     cmd = replace(scenario.command, **command)
@@ -109,7 +112,7 @@ def _short(name: str, duration_s: float, **command: object) -> firefleet.Scenari
 
 def test_a_run_without_the_team_burns_the_baseline() -> None:
     """``robots: false`` is the baseline world: the same seed burns the same cells."""
-    scenario = _short("mission-office", 40.0, robots=False)
+    scenario = _short(OFFICE, 40.0, robots=False)
     result = firefleet.simulate(scenario, record_every=100)
     metrics = mission_metrics(result)
     assert metrics["burned_area_m2"] == baseline_burned_area_m2(scenario) > 0.0
@@ -119,7 +122,7 @@ def test_a_run_without_the_team_burns_the_baseline() -> None:
 
 
 def test_air_near_the_floor_damages_a_robot_in_the_fire() -> None:
-    scenario = _short("mission-office", 10.0)
+    scenario = _short(OFFICE, 10.0)
     world = mission_world(scenario)
     state = world.init(2)
     fire_cell = tuple(int(v) for v in world.fire_cells[0])
@@ -145,7 +148,7 @@ def test_detections_are_the_detectors_and_lie_where_the_heat_is() -> None:
     odometry, lies within 3 m of a cell hotter than 100 C at that time (the detector
     reads rendered frames: hot gas at a door is a fire to it, as to a person reading
     the frame); no person is reported where there is none."""
-    scenario = _short("mission-office", 60.0)
+    scenario = _short(OFFICE, 60.0)
     result = firefleet.simulate(scenario, record_every=100)
     world = mission_world(scenario)
     det: Any = result.extra["detections"]
