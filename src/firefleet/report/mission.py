@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.colors import ListedColormap
+from matplotlib.colors import ListedColormap, PowerNorm
 from matplotlib.figure import Figure
 
 from firefleet.sim.result import SimResult
@@ -174,8 +174,9 @@ def animation_gif(result: SimResult, *, frames: int = _FRAMES) -> bytes:
             axi.axis("off")
             if i < insets:
                 # one fixed scale, 15-600 C (a Lepton's high-gain range saturates at
-                # 150 C: a robot at a burning room's door saw one flat colour)
-                axi.imshow(views[i], cmap="inferno", vmin=15.0, vmax=600.0)
+                # 150 C: a robot at a burning room's door saw one flat colour), on a
+                # power scale (gamma 0.4) so a person at 37 C still shows
+                axi.imshow(views[i], cmap="inferno", norm=PowerNorm(0.4, 15.0, 600.0))
                 axi.set_title(f"robot {i + 1} thermal, 15-600 C", fontsize=8, color=colours[i])
         images.append(
             Image.open(io.BytesIO(_png(fig, dpi=70))).convert(
