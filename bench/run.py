@@ -44,6 +44,7 @@ TOPICS = (
     "link",
     "navigation",
     "robot",
+    "mission",
 )
 ISSUE_12: tuple[tuple[str, h.Op, float], ...] = (
     ("motor.single.speedup_vs_python_control", ">=", 100.0),

@@ -108,6 +108,8 @@ def assign_frontiers(
     *,
     sensor_range_m: float,
     beta: float = 1.0,
+    taken: ArrayLike | None = None,
+    exclusive: bool = False,
 ) -> IntArray:
     """Each robot's frontier target, coordinated (module notes: Burgard et al. 2005).
 
@@ -122,6 +124,14 @@ def assign_frontiers(
     beta : float, keyword-only
         Weight of the travel cost against the utility [1/m]; with ``beta`` times the
         largest distance below 1, utility dominates (robots spread out).
+    taken : array_like of int, shape (M,), optional, keyword-only
+        Targets already held by robots that keep them (a team re-planning only its
+        robots that need a new target): their utility reduction is applied first, as if
+        they had been chosen before these robots.
+    exclusive : bool, keyword-only
+        Never give one target to two robots (the held ones included); a robot left
+        without a target gets -1. Burgard et al.'s algorithm alone only makes it
+        unlikely (the chosen target's utility drops to 0).
 
     Returns
     -------
@@ -137,6 +147,13 @@ def assign_frontiers(
     >>> assign_frontiers([[2.0, 9.0], [2.5, 8.0]], [[0.0, 0.0], [9.0, 0.0]],
     ...                  sensor_range_m=4.0, beta=0.05).tolist()
     [0, 1]
+
+    With target 1 already held by a teammate and exclusive targets, only target 0 is left,
+    and only one of the two robots gets it.
+
+    >>> assign_frontiers([[2.0, 9.0], [2.5, 8.0]], [[0.0, 0.0], [9.0, 0.0]],
+    ...                  sensor_range_m=4.0, beta=0.05, taken=[1], exclusive=True).tolist()
+    [0, -1]
     """
     d = np.asarray(distance_m, dtype=float)
     xy = np.asarray(target_xy_m, dtype=float).reshape(-1, 2)
@@ -151,15 +168,24 @@ def assign_frontiers(
     utility = np.ones(n_targets)
     gap = np.linalg.norm(xy[:, None, :] - xy[None, :, :], axis=-1)
     coverage = np.clip(1.0 - gap / sensor_range_m, 0.0, 1.0)
+    held = np.zeros(n_targets, dtype=bool)
+    for t in np.asarray([] if taken is None else taken, dtype=np.int64).reshape(-1):
+        if not 0 <= t < n_targets:
+            raise InputError(f"taken target {int(t)} is not one of the {n_targets} targets")
+        utility = utility - coverage[t]
+        held[t] = True
     free_robots = list(range(n_robots))
     while free_robots:
         score = utility[None, :] - beta * d[free_robots]
         score[~np.isfinite(d[free_robots])] = -np.inf
+        if exclusive:
+            score[:, held] = -np.inf
         flat = int(np.argmax(score))
         i, t = divmod(flat, n_targets)
         if not np.isfinite(score[i, t]):
             break  # the robots left can reach nothing
         robot = free_robots.pop(i)
         chosen[robot] = t
+        held[t] = True
         utility = utility - coverage[t]
     return chosen

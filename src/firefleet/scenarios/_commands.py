@@ -13,6 +13,7 @@ from firefleet.control.formation import FormationParams
 from firefleet.errors import InputError, check_fields
 from firefleet.planning.paths import PolynomialPath
 from firefleet.scenarios._claims import _STRICT
+from firefleet.scenarios._mission import Mission
 from firefleet.scenarios._world import Navigate
 
 
@@ -285,6 +286,6 @@ class Formation:
 
 
 Command = Annotated[
-    VoltageStep | WheelSpeedStep | PathFollowing | Formation | Navigate,
+    VoltageStep | WheelSpeedStep | PathFollowing | Formation | Navigate | Mission,
     pydantic.Field(discriminator="kind"),
 ]

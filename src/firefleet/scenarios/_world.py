@@ -26,6 +26,7 @@ import pydantic
 
 from firefleet.errors import InputError, check_fields
 from firefleet.scenarios._claims import _STRICT
+from firefleet.scenarios._mission import FireSpec, FuelSpec, Mission, ThermalSpec, VictimSpec
 from firefleet.world import BUILTIN_MAPS, OccupancyGrid, load_map
 
 __all__ = ["LidarSpec", "Navigate", "SensorsSpec", "UltrasonicSpec", "WorldSpec", "check_world"]
@@ -40,7 +41,13 @@ def _builtin_grid(name: str) -> OccupancyGrid:
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class WorldSpec:
     """The building: ``map`` is a built-in map's name (``office``, ``warehouse``,
-    ``maze``) or the path of a ``map_server`` YAML file.
+    ``maze``) or the path of a ``map_server`` YAML file; for a mission, its ``fires``,
+    ``victims`` and ``fuel`` (:mod:`firefleet.scenarios._mission`) and the cell of the
+    fire, heat and smoke grids, ``field_cell_m`` (a whole number of the map's cells), and
+    the fire's spread rate ``spread_m_s`` (its front speed along a one-cell strip of fuel;
+    over an open floor, with more burning neighbours, the front runs about 3.7 times
+    faster, measured: 4 mm/s gives some 1.5 cm/s, a metre a minute, the lateral flame
+    spread over furnishings (Quintiere 2016, ch. 8), not a flashover).
 
     Examples
     --------
@@ -50,9 +57,45 @@ class WorldSpec:
     """
 
     map: str
+    fires: tuple[FireSpec, ...] = ()
+    victims: tuple[VictimSpec, ...] = ()
+    fuel: FuelSpec = pydantic.Field(default_factory=FuelSpec)
+    field_cell_m: float = 0.25
+    spread_m_s: float = 0.004
 
     def __post_init__(self) -> None:
-        self.grid()  # an unknown name or a bad file is an error here, naming world.map
+        if not (math.isfinite(self.spread_m_s) and self.spread_m_s > 0.0):
+            raise InputError(f"world.spread_m_s must be > 0, got {self.spread_m_s}")
+        grid = self.grid()  # an unknown name or a bad file is an error here, naming world.map
+        factor = self.field_cell_m / grid.resolution_m
+        if not (factor >= 1.0 - 1e-9 and abs(factor - round(factor)) < 1e-6):
+            raise InputError(
+                f"world.field_cell_m: {self.field_cell_m:g} must be a whole number (>= 1) "
+                f"of the map's {grid.resolution_m:g} m cells"
+            )
+        points: tuple[tuple[str, tuple[FireSpec | VictimSpec, ...]], ...] = (
+            ("fires", self.fires),
+            ("victims", self.victims),
+        )
+        for key, items in points:
+            for i, item in enumerate(items):
+                why = _where_blocked(grid, (item.x_m, item.y_m))
+                if why is not None:
+                    raise InputError(
+                        f"world.{key}[{i}]: ({item.x_m:g}, {item.y_m:g}) {why} of map {self.map!r}"
+                    )
+        x0, x1, y0, y1 = grid.extent_m
+        for i, region in enumerate(self.fuel.regions):
+            if (
+                region.x_m[1] <= x0
+                or region.x_m[0] >= x1
+                or region.y_m[1] <= y0
+                or region.y_m[0] >= y1
+            ):
+                raise InputError(
+                    f"world.fuel.regions[{i}]: x_m {list(region.x_m)}, y_m {list(region.y_m)} "
+                    f"lies outside map {self.map!r} (x {x0:g}..{x1:g} m, y {y0:g}..{y1:g} m)"
+                )
 
     def grid(self) -> OccupancyGrid:
         """The map's occupancy grid (:func:`firefleet.world.load_map`)."""
@@ -104,10 +147,12 @@ class LidarSpec:
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class SensorsSpec:
-    """The range sensors every robot carries (each optional)."""
+    """The sensors every robot carries (each optional): range sensors and, for a
+    mission, the thermal camera."""
 
     ultrasonic: UltrasonicSpec | None = None
     lidar: LidarSpec | None = None
+    thermal: ThermalSpec | None = None
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
@@ -199,10 +244,17 @@ def check_world(
     poses[0]: (4, 2) is inside a wall of map 'office'
     """
     navigate = command if isinstance(command, Navigate) else None
+    mission = command if isinstance(command, Mission) else None
     if world is None:
-        if navigate is not None:
-            raise InputError("world.map: a navigate command needs a map (world: {map: office})")
+        if navigate is not None or mission is not None:
+            kind = "navigate" if navigate is not None else "mission"
+            raise InputError(f"world.map: a {kind} command needs a map (world: {{map: office}})")
         return
+    if mission is not None and mission.robots and (sensors is None or sensors.thermal is None):
+        raise InputError(
+            "sensors.thermal: a mission's robots find fires and people with their thermal "
+            "cameras (sensors: {thermal: {}})"
+        )
     grid = world.grid()
     for i, pose in enumerate(poses):
         why = _where_blocked(grid, (pose[0], pose[1]))

@@ -292,6 +292,9 @@ class WheelCommand:
     done : bool
         The task is over (every robot arrived): the loop records this tick and stops
         before ``n_steps``.
+    actions : mapping of str to ndarray
+        What the team does to the world besides driving (a mission's spray), handed to
+        the world stage's ``act(world, actions, true_poses)`` at once, for its next step.
     """
 
     reference_rad_s: FloatArray
@@ -299,6 +302,7 @@ class WheelCommand:
     series: Messages = field(default_factory=dict)
     outbox: Messages = field(default_factory=dict)
     done: bool = False
+    actions: Messages = field(default_factory=dict)
 
 
 DecideStep = Callable[[Any, DecideInputs, Any, float], tuple[Any, WheelCommand]]
@@ -556,6 +560,8 @@ def run_staged(
                     command, series={**command.series, **estimation_series(estimate)}
                 )
             sent = command.outbox
+            if command.actions:  # the world takes them at its next step
+                world = stages.world.act(world, command.actions, drive.pose)  # type: ignore[attr-defined]
             if command.voltage_v is None:
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
             else:
@@ -575,5 +581,12 @@ def run_staged(
         if command.done:
             break
     final = getattr(stages.estimation, "final", None)
-    recording = rec.recording(dt, final(estimate) if final is not None else {})
+    world_final = getattr(stages.world, "final", None)  # a world that logs what happened
+    recording = rec.recording(
+        dt,
+        {
+            **(final(estimate) if final is not None else {}),
+            **(world_final(world) if world_final is not None else {}),
+        },
+    )
     return dataclasses.replace(recording, estimation_state=estimate)

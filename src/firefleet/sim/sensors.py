@@ -26,8 +26,17 @@ from numpy.typing import ArrayLike
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array, check_fields
 from firefleet.perception.thermal import CameraModel, band_radiance, radiance_to_celsius
+from firefleet.sim._thermal_grid import GridThermalScene, grid_thermal_celsius
+from firefleet.world import OccupancyGrid
 
-__all__ = ["ThermalCameraParams", "ThermalScene", "render_thermal"]
+__all__ = [
+    "GridThermalScene",
+    "ThermalCameraParams",
+    "ThermalScene",
+    "render_thermal",
+    "render_thermal_grid",
+    "render_thermal_grid_depth",
+]
 
 
 _MAX_WORK = 6_000_000
@@ -247,6 +256,15 @@ def render_thermal(
             .reshape(-1, h_px, s, w_px, s)
             .mean(axis=(2, 4))
         )
+    return _camera_output(out, prm, rng)
+
+
+def _camera_output(
+    radiance: FloatArray, prm: ThermalCameraParams, rng: np.random.Generator
+) -> FloatArray:
+    """The camera's reading [C] of pixel radiances (N, H, W): optical blur, column
+    offsets, temporal noise, the scene range's clip and the TLinear quantisation."""
+    out = radiance
     if prm.psf_sigma_px > 0:
         out = ndi.gaussian_filter(
             out, sigma=(0, prm.psf_sigma_px, prm.psf_sigma_px), mode="nearest"
@@ -259,6 +277,128 @@ def render_thermal(
     if prm.resolution_k > 0:
         temp = np.round(temp / prm.resolution_k) * prm.resolution_k
     return np.asarray(temp, dtype=np.float64)
+
+
+def _ray_grid(prm: ThermalCameraParams) -> tuple[FloatArray, FloatArray]:
+    """Normalised coordinates of the ``supersample^2`` rays of every pixel: ``xn`` of the
+    (W s) sub-columns and ``yn`` of the (H s) sub-rows (an undistorted camera)."""
+    cam = prm.camera
+    s = prm.supersample
+    sub = (np.arange(s) + 0.5) / s - 0.5
+    rows = (np.arange(cam.height_px)[:, None] + sub[None, :]).reshape(-1)
+    cols = (np.arange(cam.width_px)[:, None] + sub[None, :]).reshape(-1)
+    xn, _ = cam.normalized(np.zeros_like(cols), cols)
+    _, yn = cam.normalized(rows, np.zeros_like(rows))
+    return xn, yn
+
+
+def render_thermal_grid(
+    poses: ArrayLike,
+    grid: OccupancyGrid,
+    temperature_c: ArrayLike,
+    burning: ArrayLike,
+    people_xy_m: ArrayLike,
+    params: ThermalCameraParams | None = None,
+    *,
+    rng: np.random.Generator,
+    scene: GridThermalScene | None = None,
+) -> FloatArray:
+    """Frames [C] that the camera on each robot sees of a grid world and its heat field.
+
+    The grid's occupied cells are walls; every open cell shows the heat field's
+    temperature on its floor, its ceiling and the wall faces next to it; burning cells
+    hold flames; people lie on the floor at body temperature (see
+    :class:`~firefleet.sim._thermal_grid.GridThermalScene`). Smoke is not an input: the
+    8-14 um band passes it. Then the camera of :func:`render_thermal` (blur, column
+    offsets, NETD, clip, quantisation).
+
+    Parameters
+    ----------
+    poses : array_like, shape (N, 3)
+        Robot poses ``x [m], y [m], theta [rad]``; the camera looks along theta.
+    grid : OccupancyGrid
+        The building (any resolution: the mission's field grid is 0.25 m).
+    temperature_c : array_like, shape (H, W)
+        The heat field [C] on ``grid``.
+    burning : array_like of bool, shape (H, W)
+        Burning cells.
+    people_xy_m : array_like, shape (V, 2)
+        People on the floor [m].
+    params : ThermalCameraParams
+        Camera, mount and noise (default: a Lepton at 0.5 m); an undistorted camera.
+    rng : numpy.random.Generator, keyword-only
+        Source of the temporal noise.
+    scene : GridThermalScene, keyword-only
+        Wall, flame and person sizes.
+
+    Returns
+    -------
+    ndarray, shape (N, H_px, W_px)
+        Apparent temperatures [C] as the camera reports them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.sim.sensors import ThermalCameraParams, render_thermal_grid
+    >>> from firefleet.world import OccupancyGrid
+    >>> walls = np.zeros((20, 20), dtype=bool)
+    >>> walls[[0, -1], :] = walls[:, [0, -1]] = True
+    >>> room = OccupancyGrid(walls, ~walls, resolution_m=0.25)
+    >>> quiet = ThermalCameraParams(netd_k=0.0, column_fpn_k=0.0, resolution_k=0.0)
+    >>> frames = render_thermal_grid(
+    ...     [[2.5, 2.5, 0.0]], room, np.full((20, 20), 25.0), np.zeros((20, 20), bool),
+    ...     np.zeros((0, 2)), quiet, rng=np.random.default_rng(0))
+    >>> frames.shape, round(float(frames.min()), 6), round(float(frames.max()), 6)
+    ((1, 60, 80), 25.0, 25.0)
+    """
+    frames, _ = render_thermal_grid_depth(
+        poses, grid, temperature_c, burning, people_xy_m, params, rng=rng, scene=scene
+    )
+    return frames
+
+
+def render_thermal_grid_depth(
+    poses: ArrayLike,
+    grid: OccupancyGrid,
+    temperature_c: ArrayLike,
+    burning: ArrayLike,
+    people_xy_m: ArrayLike,
+    params: ThermalCameraParams | None = None,
+    *,
+    rng: np.random.Generator,
+    scene: GridThermalScene | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`render_thermal_grid`'s frames and, registered to them, each pixel's depth
+    along the optical axis [m] (its central ray's; NaN where nothing is on the grid):
+    what a stereo rig aligned with the thermal camera measures, noise-free (the caller
+    adds its noise).
+
+    Returns
+    -------
+    frames : ndarray, shape (N, H_px, W_px)
+    depth_m : ndarray, shape (N, H_px, W_px)
+    """
+    prm = ThermalCameraParams() if params is None else params
+    if prm.camera.distorted:
+        raise InputError("thermal_camera.camera: the grid renderer takes an undistorted camera")
+    xn, yn = _ray_grid(prm)
+    temps, depth = grid_thermal_celsius(
+        poses,
+        grid,
+        temperature_c,
+        burning,
+        people_xy_m,
+        xn,
+        yn,
+        prm.mount_height_m,
+        GridThermalScene() if scene is None else scene,
+    )
+    s = prm.supersample
+    n = temps.shape[0]
+    h_px, w_px = prm.camera.height_px, prm.camera.width_px
+    radiance = band_radiance(temps).reshape(n, h_px, s, w_px, s).mean(axis=(2, 4))
+    centre = depth.reshape(n, h_px, s, w_px, s)[:, :, s // 2, :, s // 2]
+    return _camera_output(radiance, prm, rng), np.where(np.isfinite(centre), centre, np.nan)
 
 
 def _render_radiance(

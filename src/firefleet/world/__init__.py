@@ -17,8 +17,9 @@ from firefleet.world._fire import (
     fire_init,
     fire_step,
 )
-from firefleet.world._grid import OccupancyGrid
+from firefleet.world._grid import OccupancyGrid, coarsen
 from firefleet.world._load import BUILTIN_MAPS, load_map, parse_map
+from firefleet.world._spray import SprayParams, spray_step
 from firefleet.world._victims import (
     BODY_C,
     VictimParams,
@@ -39,14 +40,17 @@ __all__ = [
     "FireParams",
     "FireState",
     "OccupancyGrid",
+    "SprayParams",
     "VictimParams",
     "VictimState",
+    "coarsen",
     "corridor_front_speed",
     "diffuse_step",
     "fire_init",
     "fire_step",
     "load_map",
     "parse_map",
+    "spray_step",
     "stable_substeps",
     "victim_dose_rate",
     "victim_step",

@@ -146,3 +146,44 @@ class OccupancyGrid:
         r = np.clip(rc[..., 0], 0, h - 1)
         c = np.clip(rc[..., 1], 0, w - 1)
         return ~inside | self.occupied[r, c]
+
+
+def coarsen(grid: OccupancyGrid, factor: int) -> OccupancyGrid:
+    """The grid with ``factor x factor`` blocks of cells merged into one.
+
+    A block is occupied when any of its cells is (a thin wall stays a wall), free when
+    all of its cells are free, unknown otherwise. The grid is cropped to whole blocks
+    from its lower-left corner (the origin stays put).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    factor : int
+        Cells per side of a block, >= 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.world import OccupancyGrid, coarsen
+    >>> occupied = np.zeros((4, 6), dtype=bool); occupied[0, 5] = True
+    >>> small = coarsen(OccupancyGrid(occupied, ~occupied, resolution_m=0.05), 2)
+    >>> small.shape, small.resolution_m, small.occupied.astype(int).tolist()
+    ((2, 3), 0.1, [[0, 0, 1], [0, 0, 0]])
+    """
+    if int(factor) != factor or factor < 1:
+        raise InputError(f"coarsen: factor must be a whole number >= 1, got {factor!r}")
+    f = int(factor)
+    h, w = grid.shape
+    hc, wc = h // f, w // f
+    if hc == 0 or wc == 0:
+        raise InputError(
+            f"coarsen: map {grid.name!r} {grid.shape} is smaller than one block of {f}"
+        )
+    rows = slice(h - hc * f, h)  # keep the bottom rows: the origin is the lower-left corner
+    occ: BoolArray = np.asarray(
+        grid.occupied[rows, : wc * f].reshape(hc, f, wc, f).any(axis=(1, 3))
+    )
+    free: BoolArray = np.asarray(grid.free[rows, : wc * f].reshape(hc, f, wc, f).all(axis=(1, 3)))
+    return OccupancyGrid(
+        occ, free & ~occ, resolution_m=grid.resolution_m * f, origin_m=grid.origin_m, name=grid.name
+    )

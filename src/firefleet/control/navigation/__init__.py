@@ -13,6 +13,7 @@ The team controller the ``navigate`` task kind calls each tick::
     params = NavigationParams()                       # frozen; Table 2 motors at 12 V
     state = navigation_init(grid, poses, goals_m, params)
     state, v_m_s, omega_rad_s = navigation_step(state, inputs, params, dt_s)
+    state = navigation_retarget(state, goals_m, which)   # new goals for some robots
 
 with ``inputs = NavigationInputs(pose (N, 3), ranges {name: (ranges (N, B), bearings (B,)
 or (N, B))}, teammates_xy_m (N, 2), t_s)``; ``state.status`` per robot is one of
@@ -32,6 +33,7 @@ from firefleet.control.navigation._team import (
     NavigationParams,
     NavigationState,
     navigation_init,
+    navigation_retarget,
 )
 
 __all__ = [
@@ -49,6 +51,7 @@ __all__ = [
     "dwa_command",
     "dwa_limits_from_motor",
     "navigation_init",
+    "navigation_retarget",
     "navigation_step",
     "smooth_path",
 ]

@@ -65,11 +65,18 @@ def _near_walls(
         return np.full((n, 1, 2), _FAR), radius
     out = np.full((n, _MAX_WALL_POINTS, 2), _FAR)
     used = 1
+    tree = state.wall_tree
+    found = None if tree is None else tree.query_ball_point(pose[:, :2], reach_m)
     for i in range(n):
-        d = np.hypot(pts[:, 0] - pose[i, 0], pts[:, 1] - pose[i, 1])
-        near = np.nonzero(d <= reach_m)[0]
+        if found is None:
+            d = np.hypot(pts[:, 0] - pose[i, 0], pts[:, 1] - pose[i, 1])
+            near = np.nonzero(d <= reach_m)[0]
+            dn = d[near]
+        else:  # the same points (in the same order), from the k-d tree
+            near = np.sort(np.asarray(found[i], dtype=np.int64))
+            dn = np.hypot(pts[near, 0] - pose[i, 0], pts[near, 1] - pose[i, 1])
         if len(near) > _MAX_WALL_POINTS:
-            near = near[np.argpartition(d[near], _MAX_WALL_POINTS - 1)[:_MAX_WALL_POINTS]]
+            near = near[np.argpartition(dn, _MAX_WALL_POINTS - 1)[:_MAX_WALL_POINTS]]
         out[i, : len(near)] = pts[near]
         used = max(used, len(near))
     return out[:, :used], radius
@@ -290,24 +297,29 @@ def navigation_step(
                 since[i] = t
                 break
 
-    # the safety layer
+    # the safety layer (for the robots under way: the others brake below)
     reach = params.dwa.v_max_m_s * params.dwa.horizon_s + params.robot_radius_m + 0.5
     points = _range_points(inputs, pose, reach)
-    mate_pts = np.broadcast_to(mates[None], (n, n, 2)).copy()
-    mate_pts[np.arange(n), np.arange(n)] = _FAR
-    walls, wall_radius = _near_walls(state, pose, reach)
-    obstacles = np.concatenate([points, walls, mate_pts], axis=1)
-    radii = np.concatenate(
-        [
-            np.zeros(points.shape[:2]),
-            np.full(walls.shape[:2], wall_radius),
-            np.full((n, n), params.robot_radius_m),
-        ],
-        axis=1,
-    )
-    v, w, _ = dwa_command(
-        pose, state.command, np.stack([v_ref, w_ref], axis=1), obstacles, radii, params.dwa, dt_s
-    )
+    v = np.zeros(n)
+    w = np.zeros(n)
+    act = np.flatnonzero(active)
+    if len(act):
+        mate_pts = np.broadcast_to(mates[None], (len(act), n, 2)).copy()
+        mate_pts[np.arange(len(act)), act] = _FAR
+        walls, wall_radius = _near_walls(state, pose[act], reach)
+        obstacles = np.concatenate([points[act], walls, mate_pts], axis=1)
+        radii = np.concatenate(
+            [
+                np.zeros((len(act), points.shape[1])),
+                np.full(walls.shape[:2], wall_radius),
+                np.full((len(act), n), params.robot_radius_m),
+            ],
+            axis=1,
+        )
+        ref = np.stack([v_ref, w_ref], axis=1)[act]
+        v[act], w[act], _ = dwa_command(
+            pose[act], state.command[act], ref, obstacles, radii, params.dwa, dt_s
+        )
     # robots that stop: brake as hard as the window allows (the window holds 0 after
     # a tenth of a second at most)
     stop = ~active

@@ -1,0 +1,304 @@
+"""The team's knowledge of fires and victims, merged from every robot's detections.
+
+With the ideal link every robot receives what all the others sent at the last tick, so
+the team holds one knowledge, the union of all detections (each detection a message):
+
+- a *fire* is a cluster of burning *spots* (points a robot detected fire at, kept at
+  least half ``fire_merge_m`` apart, so the cluster keeps the fire's extent); a
+  detection within ``fire_merge_m`` of a spot joins that spot's fire (and joins two
+  fires it touches into one), farther it starts a new fire. A spot is believed out
+  after ``fire_out_looks`` thermal frames in a row that looked at it (in a camera's
+  cone, within ``sensing_range_m``, in line of sight) and saw no fire within
+  ``fire_merge_m``; a fire without spots is out. A fire's position is the mean of its
+  spots, its extent the largest distance of a spot from it;
+- a *victim* is a person detection; later ones within ``victim_merge_m`` refine its
+  position (running mean). It is *confirmed* once ``confirm_repeats`` detections of it
+  came from robots within ``confirm_radius_m`` (2 m, the issue's rule) of it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from firefleet._typing import BoolArray, FloatArray, IntArray
+from firefleet.control.mission._coverage import CoarseMap, line_of_sight
+from firefleet.control.mission._params import TacticsParams
+
+__all__ = ["Knowledge", "empty_knowledge", "fires_of", "update_knowledge"]
+
+
+@dataclass(frozen=True, eq=False)
+class Knowledge:
+    """Fires (as spots) and victims the team believes in (module notes).
+
+    Attributes
+    ----------
+    spot_xy_m : ndarray, shape (S, 2)
+        Burning spots [m].
+    spot_fire : ndarray of int, shape (S,)
+        The fire (a stable id) of each spot.
+    spot_misses : ndarray of int, shape (S,)
+        Looks in a row that saw no fire at each spot.
+    next_fire : int
+        The next fire id.
+    victim_xy_m : ndarray, shape (V, 2)
+        Victims [m].
+    victim_hits : ndarray of int, shape (V,)
+        Detections merged into each.
+    victim_close : ndarray of int, shape (V,)
+        Detections of each from within ``confirm_radius_m``.
+    victim_confirmed_s : ndarray, shape (V,)
+        When each was confirmed [s] (NaN: not yet).
+    victim_misses : ndarray of int, shape (V,)
+        Looks in a row at each (in a camera's cone, in range, in sight) that saw no
+        person there; an unconfirmed victim with ``victim_out_looks`` of them is
+        dismissed (a false detection: hot gas at a door) until detected again.
+    """
+
+    spot_xy_m: FloatArray
+    spot_fire: IntArray
+    spot_misses: IntArray
+    next_fire: int
+    victim_xy_m: FloatArray
+    victim_hits: IntArray
+    victim_close: IntArray
+    victim_confirmed_s: FloatArray
+    victim_misses: IntArray
+
+    @property
+    def victim_confirmed(self) -> BoolArray:
+        """Whether each victim is confirmed, shape (V,)."""
+        out: BoolArray = np.isfinite(self.victim_confirmed_s)
+        return out
+
+    def dismissed(self, params: TacticsParams) -> BoolArray:
+        """Unconfirmed victims dismissed as false detections, shape (V,)."""
+        out: BoolArray = ~self.victim_confirmed & (self.victim_misses >= params.victim_out_looks)
+        return out
+
+
+def empty_knowledge() -> Knowledge:
+    """Nothing known yet."""
+    return Knowledge(
+        spot_xy_m=np.zeros((0, 2)),
+        spot_fire=np.zeros(0, dtype=np.int64),
+        spot_misses=np.zeros(0, dtype=np.int64),
+        next_fire=0,
+        victim_xy_m=np.zeros((0, 2)),
+        victim_hits=np.zeros(0, dtype=np.int64),
+        victim_close=np.zeros(0, dtype=np.int64),
+        victim_confirmed_s=np.zeros(0),
+        victim_misses=np.zeros(0, dtype=np.int64),
+    )
+
+
+def fires_of(k: Knowledge) -> tuple[IntArray, FloatArray, FloatArray]:
+    """The believed fires: ids (F,) ascending, positions (F, 2) [m], extents (F,) [m]."""
+    ids, inv = np.unique(k.spot_fire, return_inverse=True)
+    f = len(ids)
+    if f == 0:
+        return ids.astype(np.int64), np.zeros((0, 2)), np.zeros(0)
+    counts = np.bincount(inv, minlength=f).astype(float)
+    xy = (
+        np.stack(
+            [np.bincount(inv, k.spot_xy_m[:, 0], f), np.bincount(inv, k.spot_xy_m[:, 1], f)], axis=1
+        )
+        / counts[:, None]
+    )
+    d = np.hypot(*(k.spot_xy_m - xy[inv]).T)
+    extent = np.zeros(f)
+    np.maximum.at(extent, inv, d)
+    return ids.astype(np.int64), xy, extent
+
+
+def _add_fire(k: Knowledge, p: FloatArray, merge_m: float) -> tuple[Knowledge, bool]:
+    """One fire detection into the spots; True when the set of fires changed."""
+    if len(k.spot_xy_m):
+        d = np.hypot(k.spot_xy_m[:, 0] - p[0], k.spot_xy_m[:, 1] - p[1])
+        near = d <= merge_m
+    else:
+        d = np.zeros(0)
+        near = np.zeros(0, dtype=bool)
+    if near.any():
+        touched = np.unique(k.spot_fire[near])
+        fire = int(touched.min())
+        spot_fire = k.spot_fire
+        if len(touched) > 1:  # the detection joins fires that grew together
+            spot_fire = np.where(np.isin(spot_fire, touched), fire, spot_fire)
+        misses = k.spot_misses.copy()
+        misses[d <= 0.5 * merge_m] = 0
+        if d.min() > 0.5 * merge_m:  # a new spot of that fire
+            return replace(
+                k,
+                spot_xy_m=np.vstack([k.spot_xy_m, p[None]]),
+                spot_fire=np.append(spot_fire, fire),
+                spot_misses=np.append(misses, 0),
+            ), len(touched) > 1
+        return replace(k, spot_fire=spot_fire, spot_misses=misses), len(touched) > 1
+    return replace(
+        k,
+        spot_xy_m=np.vstack([k.spot_xy_m, p[None]]),
+        spot_fire=np.append(k.spot_fire, k.next_fire),
+        spot_misses=np.append(k.spot_misses, 0),
+        next_fire=k.next_fire + 1,
+    ), True
+
+
+def _add_person(
+    k: Knowledge, p: FloatArray, robot_xy: FloatArray, t_s: float, params: TacticsParams
+) -> tuple[Knowledge, bool]:
+    """One person detection into the victims; True when a victim appeared or was confirmed."""
+    close = math.hypot(*(robot_xy - p)) <= params.confirm_radius_m
+    if len(k.victim_xy_m):
+        d = np.hypot(k.victim_xy_m[:, 0] - p[0], k.victim_xy_m[:, 1] - p[1])
+        j = int(np.argmin(d))
+        if d[j] <= params.victim_merge_m:
+            hits = k.victim_hits.copy()
+            hits[j] += 1
+            xy = k.victim_xy_m.copy()
+            xy[j] += (p - xy[j]) / hits[j]
+            near = k.victim_close.copy()
+            near[j] += int(math.hypot(*(robot_xy - xy[j])) <= params.confirm_radius_m)
+            conf = k.victim_confirmed_s.copy()
+            new = bool(~np.isfinite(conf[j]) and near[j] >= params.confirm_repeats)
+            if new:
+                conf[j] = t_s
+            misses = k.victim_misses.copy()
+            back = bool(misses[j] >= params.victim_out_looks)
+            misses[j] = 0
+            return replace(
+                k,
+                victim_xy_m=xy,
+                victim_hits=hits,
+                victim_close=near,
+                victim_confirmed_s=conf,
+                victim_misses=misses,
+            ), new or back
+    conf_s = t_s if close and params.confirm_repeats <= 1 else math.nan
+    return replace(
+        k,
+        victim_xy_m=np.vstack([k.victim_xy_m, p[None]]),
+        victim_hits=np.append(k.victim_hits, 1),
+        victim_close=np.append(k.victim_close, int(close)),
+        victim_confirmed_s=np.append(k.victim_confirmed_s, conf_s),
+        victim_misses=np.append(k.victim_misses, 0),
+    ), True
+
+
+def update_knowledge(
+    k: Knowledge,
+    cm: CoarseMap,
+    pose: FloatArray,
+    fire_xy: FloatArray,
+    fire_robot: IntArray,
+    person_xy: FloatArray,
+    person_robot: IntArray,
+    looked: BoolArray,
+    t_s: float,
+    params: TacticsParams,
+) -> tuple[Knowledge, bool]:
+    """This tick's detections and looks into the knowledge (module notes).
+
+    Parameters
+    ----------
+    k : Knowledge
+    cm : CoarseMap
+        For the lines of sight of the looks.
+    pose : ndarray, shape (N, 3)
+        Estimated poses.
+    fire_xy, person_xy : ndarray, shape (K, 2), (P, 2)
+        Detections [m].
+    fire_robot, person_robot : ndarray of int, shape (K,), (P,)
+        Who made them.
+    looked : ndarray of bool, shape (N,)
+        Robots (working) whose thermal frame was read this tick.
+    t_s : float
+    params : TacticsParams
+
+    Returns
+    -------
+    Knowledge
+    changed : bool
+        A fire or a victim appeared, merged, went out or was confirmed.
+    """
+    changed = False
+    for p in fire_xy:
+        k, c = _add_fire(k, p, params.fire_merge_m)
+        changed |= c
+    for p, r in zip(person_xy, person_robot, strict=True):
+        k, c = _add_person(k, p, pose[int(r), :2], t_s, params)
+        changed |= c
+    if len(k.spot_xy_m) and looked.any():
+        lookers = np.flatnonzero(looked)
+        spots = k.spot_xy_m
+        dx = spots[None, :, 0] - pose[lookers, None, 0]
+        dy = spots[None, :, 1] - pose[lookers, None, 1]
+        bearing = np.arctan2(dy, dx) - pose[lookers, None, 2]
+        off = np.abs((bearing + np.pi) % (2 * np.pi) - np.pi)
+        in_cone = (np.hypot(dx, dy) <= params.sensing_range_m) & (off <= 0.5 * params.hfov_rad)
+        if in_cone.any():
+            li, si = np.nonzero(in_cone)
+            ok = line_of_sight(cm, pose[lookers[li], :2], spots[si])
+            seen = np.zeros(len(spots), dtype=bool)
+            seen[si[ok]] = True
+            if len(fire_xy):
+                d = np.hypot(
+                    spots[:, None, 0] - fire_xy[None, :, 0], spots[:, None, 1] - fire_xy[None, :, 1]
+                )
+                seen &= d.min(axis=1) > params.fire_merge_m
+            if seen.any():
+                misses = k.spot_misses + seen
+                keep = misses < params.fire_out_looks
+                before = len(np.unique(k.spot_fire))
+                k = replace(
+                    k,
+                    spot_xy_m=spots[keep],
+                    spot_fire=k.spot_fire[keep],
+                    spot_misses=misses[keep],
+                )
+                changed |= len(np.unique(k.spot_fire)) != before
+    if len(k.victim_xy_m) and looked.any():
+        k, c = _victim_looks(k, cm, pose, person_xy, looked, params)
+        changed |= c
+    return k, changed
+
+
+def _victim_looks(
+    k: Knowledge,
+    cm: CoarseMap,
+    pose: FloatArray,
+    person_xy: FloatArray,
+    looked: BoolArray,
+    params: TacticsParams,
+) -> tuple[Knowledge, bool]:
+    """Unconfirmed victims looked at without a person detection near them: one miss
+    each; True when one was dismissed."""
+    open_ = ~k.victim_confirmed
+    if not open_.any():
+        return k, False
+    lookers = np.flatnonzero(looked)
+    vic = k.victim_xy_m
+    dx = vic[None, :, 0] - pose[lookers, None, 0]
+    dy = vic[None, :, 1] - pose[lookers, None, 1]
+    off = np.abs((np.arctan2(dy, dx) - pose[lookers, None, 2] + np.pi) % (2 * np.pi) - np.pi)
+    in_cone = (np.hypot(dx, dy) <= params.sensing_range_m) & (off <= 0.5 * params.hfov_rad)
+    in_cone &= open_[None, :]
+    if not in_cone.any():
+        return k, False
+    li, vi = np.nonzero(in_cone)
+    ok = line_of_sight(cm, pose[lookers[li], :2], vic[vi])
+    seen = np.zeros(len(vic), dtype=bool)
+    seen[vi[ok]] = True
+    if len(person_xy):
+        d = np.hypot(
+            vic[:, None, 0] - person_xy[None, :, 0], vic[:, None, 1] - person_xy[None, :, 1]
+        )
+        seen &= d.min(axis=1) > params.victim_merge_m
+    if not seen.any():
+        return k, False
+    misses = k.victim_misses + seen
+    dismissed = (misses == params.victim_out_looks) & seen
+    return replace(k, victim_misses=misses), bool(dismissed.any())

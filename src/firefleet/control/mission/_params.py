@@ -1,0 +1,294 @@
+"""The team's constants, what it observes at a tick, and the orders it gives."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from firefleet._typing import BoolArray, FloatArray, IntArray
+from firefleet.control.navigation import NavigationParams
+from firefleet.errors import InputError, check_fields
+
+__all__ = ["MODES", "Orders", "TacticsObservation", "TacticsParams"]
+
+MODES = ("explore", "confirm", "fight", "refill", "idle", "damaged")
+"""What a robot is doing (``Orders.mode`` holds the index in this tuple)."""
+
+EXPLORE, CONFIRM, FIGHT, REFILL, IDLE, DAMAGED = range(len(MODES))
+
+
+@dataclass(frozen=True, eq=False)
+class TacticsParams:
+    """The constants of the team's behaviour.
+
+    Attributes
+    ----------
+    standoff_m : float
+        Distance kept from a fire's edge: the ring's radius is the fire's extent plus
+        this [m].
+    spray_range_m : float
+        Farthest a nozzle reaches [m]: a robot sprays while its fire's nearest burning
+        spot is this close and in line of sight.
+    spray_half_angle_rad : float
+        A robot sprays only once its heading is this close to the fire's bearing [rad].
+    tank_l : float
+        Tank capacity [L].
+    flow_l_s : float
+        Nozzle flow [L/s] (the kind drains the tank; the team reads ``tank_l`` back).
+    refill_l_s : float
+        Rate at which the kind refills a tank at the refill point [L/s].
+    refill_xy_m : tuple of float or None
+        The refill point [m]; ``None``: the centroid of the team's start poses (moved
+        to the nearest open cell).
+    refill_radius_m : float
+        A robot refills within this distance of the refill point [m].
+    low_tank_frac : float
+        Below this fraction of the tank a fire costs a robot ``low_tank_penalty_m`` more.
+    low_tank_penalty_m : float
+        That penalty, in metres of travel [m].
+    confirm_radius_m : float
+        A person detection confirms a victim only from a robot this close to it [m]
+        (the issue's 2 m).
+    confirm_repeats : int
+        Detections from that close needed to confirm a victim.
+    sensing_range_m : float
+        How far the thermal camera covers the building (the coverage, the fires'
+        "looked at and not there") [m].
+    hfov_rad : float
+        The thermal camera's horizontal field of view [rad] (the Lepton's 51 deg).
+    fire_merge_m : float
+        A fire detection within this distance of a believed fire's spots joins it [m].
+    victim_merge_m : float
+        A person detection within this distance of a believed victim is that victim [m].
+    fire_out_looks : int
+        Thermal frames in a row that look at a believed fire's spot (in the cone, in
+        range, in line of sight) without detecting fire before the spot is believed out.
+    victim_out_looks : int
+        Looks in a row that see no person where an unconfirmed victim is believed
+        before it is dismissed as a false detection (until detected again).
+    explore_frac : float
+        While floor is left uncovered, at least this fraction of the working robots
+        (rounded up) keeps exploring: the fires' demands are cut to leave them.
+    fire_keepout_m : float
+        Paths are priced higher within this distance of a burning spot [m].
+    fire_cost : float
+        Extra planning cost per metre there (the map's free cells cost 1 per metre).
+    fire_block_m : float
+        Paths never pass within this distance of a burning spot [m] (0: none), except
+        within 1 m of a robot (it can always leave).
+    robot_per_fire_m : float
+        A fire needs one robot more per this many metres of its extent's radius.
+    fire_robots_min, fire_robots_max : int
+        Robots a fire needs, at least and at most.
+    replan_s : float
+        Least time between two allocations [s]; a detection or a robot's change of
+        state triggers one, and exploration is re-planned at least every
+        ``explore_replan_s``.
+    explore_replan_s : float
+        Longest time between two exploration plans [s].
+    coverage_period_s : float
+        How often the coverage and the frontiers are updated [s].
+    nav_period_s : float
+        How often the navigation controller runs [s] (the commands hold in between).
+    plan_cell_m : float
+        Cell side of the coarse grid on which coverage, frontiers and travel distances
+        are computed [m] (a whole number of map cells; at least one).
+    travel_limit_m : float
+        Farthest a robot's exploration travel distances are searched [m]; frontiers
+        farther cost their straight-line distance times ``detour_factor``.
+    detour_factor : float
+        Straight-line distance multiplier for frontiers past ``travel_limit_m``.
+    probe_m : float
+        An explorer's goal lies up to this far past its frontier, into the uncovered
+        floor [m] (0: on the frontier).
+    burgard_beta : float
+        Weight of travel cost against utility in Burgard's frontier choice [1/m].
+    stall_s : float
+        An explorer that comes no closer to its goal in this time gives it up [s].
+    scan_omega_rad_s : float
+        Turn rate of a robot that reached its frontier and looks around [rad/s].
+    face_gain : float
+        Proportional gain turning a robot towards what it faces [1/s].
+    keep_bonus_m : float
+        Hysteresis: a robot's current task costs it this much less [m].
+    frontier_min_cells : int
+        Smallest frontier kept [coarse cells].
+    nav : NavigationParams
+        The navigation controller's constants.
+    """
+
+    standoff_m: float = 1.5
+    spray_range_m: float = 3.0
+    spray_half_angle_rad: float = math.radians(15.0)
+    tank_l: float = 20.0
+    flow_l_s: float = 0.5
+    refill_l_s: float = 2.0
+    refill_xy_m: tuple[float, float] | None = None
+    refill_radius_m: float = 1.0
+    low_tank_frac: float = 0.25
+    low_tank_penalty_m: float = 20.0
+    confirm_radius_m: float = 2.0
+    confirm_repeats: int = 2
+    sensing_range_m: float = 4.0
+    hfov_rad: float = math.radians(51.0)
+    fire_merge_m: float = 1.0
+    victim_merge_m: float = 1.0
+    fire_out_looks: int = 9
+    victim_out_looks: int = 18
+    explore_frac: float = 0.3
+    fire_keepout_m: float = 1.5
+    fire_cost: float = 20.0
+    fire_block_m: float = 0.75
+    robot_per_fire_m: float = 1.0
+    fire_robots_min: int = 2
+    fire_robots_max: int = 6
+    replan_s: float = 1.0
+    explore_replan_s: float = 3.0
+    coverage_period_s: float = 0.25
+    nav_period_s: float = 0.1
+    plan_cell_m: float = 0.25
+    travel_limit_m: float = 15.0
+    detour_factor: float = 1.5
+    probe_m: float = 0.75
+    burgard_beta: float = 0.02
+    stall_s: float = 10.0
+    scan_omega_rad_s: float = 1.0
+    face_gain: float = 2.0
+    keep_bonus_m: float = 2.0
+    frontier_min_cells: int = 3
+    nav: NavigationParams = field(default_factory=NavigationParams)
+
+    def __post_init__(self) -> None:
+        check_fields(
+            self,
+            "tactics",
+            positive=(
+                "standoff_m",
+                "spray_range_m",
+                "spray_half_angle_rad",
+                "tank_l",
+                "flow_l_s",
+                "refill_l_s",
+                "refill_radius_m",
+                "confirm_radius_m",
+                "sensing_range_m",
+                "hfov_rad",
+                "fire_merge_m",
+                "victim_merge_m",
+                "robot_per_fire_m",
+                "replan_s",
+                "explore_replan_s",
+                "coverage_period_s",
+                "nav_period_s",
+                "plan_cell_m",
+                "travel_limit_m",
+                "detour_factor",
+                "scan_omega_rad_s",
+                "stall_s",
+                "face_gain",
+            ),
+            non_negative=(
+                "low_tank_frac",
+                "low_tank_penalty_m",
+                "burgard_beta",
+                "keep_bonus_m",
+                "probe_m",
+                "explore_frac",
+                "fire_keepout_m",
+                "fire_cost",
+                "fire_block_m",
+            ),
+        )
+        for name in (
+            "confirm_repeats",
+            "fire_out_looks",
+            "victim_out_looks",
+            "fire_robots_min",
+            "frontier_min_cells",
+        ):
+            if int(getattr(self, name)) < 1:
+                raise InputError(f"tactics.{name} must be >= 1, got {getattr(self, name)}")
+        if self.fire_robots_max < self.fire_robots_min:
+            raise InputError(
+                f"tactics.fire_robots_max must be >= fire_robots_min ({self.fire_robots_min}), "
+                f"got {self.fire_robots_max}"
+            )
+        if self.refill_xy_m is not None and (
+            len(self.refill_xy_m) != 2 or not np.all(np.isfinite(self.refill_xy_m))
+        ):
+            raise InputError(f"tactics.refill_xy_m must be finite (x, y), got {self.refill_xy_m}")
+
+
+@dataclass(frozen=True, eq=False)
+class TacticsObservation:
+    """What the team knows at a tick (with the ideal link: what every robot sent).
+
+    Attributes
+    ----------
+    t_s : float
+        Time [s].
+    pose_m : ndarray, shape (N, 3)
+        Estimated poses x [m], y [m], heading [rad].
+    fire_xy_m : ndarray, shape (K, 2)
+        This tick's fire detections in the map frame [m].
+    fire_robot : ndarray of int, shape (K,)
+        The robot that made each.
+    person_xy_m : ndarray, shape (P, 2)
+        This tick's person detections in the map frame [m].
+    person_robot : ndarray of int, shape (P,)
+        The robot that made each.
+    ranges : mapping of str to (ranges (N, B), bearings (B,) or (N, B))
+        Range readings as :class:`~firefleet.control.navigation.NavigationInputs` takes
+        them.
+    tank_l : ndarray, shape (N,)
+        Agent left in each tank [L].
+    damaged : ndarray of bool, shape (N,)
+        Robots damaged (they stop for good).
+    alive : ndarray of bool, shape (N,)
+        Robots working (a robot not alive is treated as damaged).
+    looked : ndarray of bool, shape (N,) or None
+        Robots whose thermal frame was taken (and run through the detector) this tick;
+        ``None``: every robot's. Only a look that sees no fire where a fire is believed
+        counts against it.
+    """
+
+    t_s: float
+    pose_m: FloatArray
+    fire_xy_m: FloatArray
+    fire_robot: IntArray
+    person_xy_m: FloatArray
+    person_robot: IntArray
+    ranges: Mapping[str, tuple[ArrayLike, ArrayLike]]
+    tank_l: FloatArray
+    damaged: BoolArray
+    alive: BoolArray
+    looked: BoolArray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Orders:
+    """What every robot is told to do this tick (batch-first).
+
+    Attributes
+    ----------
+    v_m_s : ndarray, shape (N,)
+        Linear velocity set point [m/s].
+    omega_rad_s : ndarray, shape (N,)
+        Angular velocity set point [rad/s].
+    spray : ndarray of bool, shape (N,)
+        Nozzle open.
+    mode : ndarray of int8, shape (N,)
+        Index in :data:`MODES`.
+    goal_xy_m : ndarray, shape (N, 2)
+        Where each robot is going [m] (NaN: nowhere).
+    """
+
+    v_m_s: FloatArray
+    omega_rad_s: FloatArray
+    spray: BoolArray
+    mode: np.ndarray
+    goal_xy_m: FloatArray

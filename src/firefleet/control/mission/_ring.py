@@ -1,0 +1,168 @@
+"""The ring of robots around a fire: the regular formation law with the fire as leader.
+
+The slots are where the deliverable's formation puts robots about a virtual leader:
+``control.formation``'s regular law (the eq. 6 attraction to the circle of radius
+``alpha`` and the angular-neighbour spacing of Wang, Xie and Cao 2013) is relaxed on
+points started at the robots' bearings about the fire, with ``alpha`` the ring's radius;
+its equilibrium is the regular polygon in the order the robots already have. The
+polygon may then turn as a whole (the law is blind to a rotation) to put the most slots
+on open floor with a line of sight to the fire; a slot still in a wall moves along its
+ray to the nearest open radius within the nozzle's reach (the spacing is then regular
+only where the walls allow). Robots take the slots by an optimal assignment (Kuhn 1955)
+of their straight-line distances.
+
+References
+----------
+C. Wang, G. Xie and M. Cao, "Forming circle formations of anonymous mobile agents with
+order preservation", IEEE Trans. Automatic Control 58(12), 2013.
+H. W. Kuhn, "The Hungarian method for the assignment problem", Naval Research Logistics
+Quarterly 2, 1955.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from firefleet._typing import BoolArray, FloatArray
+from firefleet.control.formation import circle_attraction, ring_spacing
+from firefleet.control.mission._coverage import CoarseMap, line_of_sight
+from firefleet.control.navigation import Costmap
+from firefleet.planning.allocation import allocate_tasks
+
+__all__ = ["regular_ring", "ring_slots"]
+
+_STEP = 1.0
+"""Relaxation step (a unit damping and mass: the displacement per unit force)."""
+_SPACING_N_M = 0.5
+"""K_s of the relaxation: its fastest angular mode moves by 2 K_s _STEP < 2 (stable)."""
+
+
+def regular_ring(
+    center_xy_m: FloatArray, radius_m: float, start_xy_m: FloatArray, *, tol_rad: float = 1e-6
+) -> FloatArray:
+    """The formation law's equilibrium on the circle about a leader.
+
+    Parameters
+    ----------
+    center_xy_m : ndarray, shape (2,)
+        The leader (the fire) [m].
+    radius_m : float
+        The circle's radius alpha [m].
+    start_xy_m : ndarray, shape (M, 2)
+        Where the robots are [m] (their bearings start the relaxation).
+    tol_rad : float, keyword-only
+        Stop once every ``|g+ - g-|`` is below this [rad].
+
+    Returns
+    -------
+    ndarray, shape (M, 2)
+        Points on the circle at angles ``2 pi / M`` apart, in the robots' angular order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p = regular_ring(np.zeros(2), 2.0, np.array([[1.0, 0.0], [1.0, 0.2], [0.0, 1.0]]))
+    >>> a = np.sort(np.degrees(np.arctan2(p[:, 1], p[:, 0])) % 360)
+    >>> np.round(np.diff(a), 3).tolist(), np.round(np.hypot(*p.T), 6).tolist()
+    ([120.0, 120.0], [2.0, 2.0, 2.0])
+    """
+    c = np.asarray(center_xy_m, dtype=float)
+    d = np.asarray(start_xy_m, dtype=float).reshape(-1, 2) - c
+    m = len(d)
+    theta = np.arctan2(d[:, 1], d[:, 0])
+    theta[np.hypot(d[:, 0], d[:, 1]) < 1e-9] = 0.0
+    # robots at one bearing: fan them out a little, in index order
+    theta = theta + 1e-3 * np.arange(m)
+    p = c + radius_m * np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    if m < 2:
+        return p
+    gain = 0.25 / radius_m**2  # radial stiffness 2 a alpha^2 = 0.5
+    for _ in range(5000):
+        force = circle_attraction(p, c, alpha_m=radius_m, gain=gain)
+        force += ring_spacing(p, c, stiffness_n_m=_SPACING_N_M)
+        p = p + _STEP * force
+        th = np.sort(np.arctan2(p[:, 1] - c[1], p[:, 0] - c[0]))
+        gaps = np.diff(np.append(th, th[0] + 2 * math.pi))
+        if np.abs(gaps - 2 * math.pi / m).max() < tol_rad:
+            break
+    d = p - c
+    out: FloatArray = c + radius_m * d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    return out
+
+
+def _valid(cm: CoarseMap, costmap: Costmap, center: FloatArray, pts: FloatArray) -> BoolArray:
+    grid = costmap.grid
+    inside = grid.contains(pts)
+    rc = grid.cell_of(pts)
+    h, w = grid.shape
+    open_ = inside & ~costmap.blocked[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+    out: BoolArray = open_ & line_of_sight(cm, pts, np.broadcast_to(center, pts.shape))
+    return out
+
+
+def ring_slots(
+    cm: CoarseMap,
+    costmap: Costmap,
+    center_xy_m: FloatArray,
+    radius_m: float,
+    reach_m: float,
+    robots_xy_m: FloatArray,
+) -> FloatArray:
+    """Each robot's slot on the ring about a fire (module notes).
+
+    Parameters
+    ----------
+    cm : CoarseMap
+        For the lines of sight.
+    costmap : Costmap
+        Where a robot may stand.
+    center_xy_m : ndarray, shape (2,)
+        The fire [m].
+    radius_m : float
+        The ring's radius [m].
+    reach_m : float
+        Farthest a slot may move out along its ray when its own spot is in a wall [m].
+    robots_xy_m : ndarray, shape (M, 2)
+        The robots assigned to the fire [m].
+
+    Returns
+    -------
+    ndarray, shape (M, 2)
+        Robot k's slot [m].
+    """
+    c = np.asarray(center_xy_m, dtype=float)
+    robots = np.asarray(robots_xy_m, dtype=float).reshape(-1, 2)
+    m = len(robots)
+    ring = regular_ring(c, radius_m, robots)
+    d = ring - c
+    base = np.arctan2(d[:, 1], d[:, 0])
+    best, best_score = ring, -1.0
+    step = math.radians(5.0)
+    period = 2 * math.pi / m
+    for k in range(max(1, round(period / step))):
+        delta = k * step
+        delta = delta if delta <= period / 2 else delta - period
+        ang = base + delta
+        pts = c + radius_m * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        score = _valid(cm, costmap, c, pts).sum() - abs(delta) * 1e-3
+        if score > best_score:
+            best, best_score = pts, score
+    slots = best.copy()
+    bad = ~_valid(cm, costmap, c, slots)
+    lo = costmap.inflation_m + 0.2
+    radii = np.concatenate(
+        [np.arange(radius_m - 0.1, lo, -0.1), np.arange(radius_m + 0.1, reach_m, 0.1)]
+    )
+    radii = radii[np.argsort(np.abs(radii - radius_m), kind="stable")]
+    for i in map(int, np.flatnonzero(bad)):
+        u = (slots[i] - c) / radius_m
+        cand = c + radii[:, None] * u
+        ok = _valid(cm, costmap, c, cand)
+        if ok.any():
+            slots[i] = cand[int(np.argmax(ok))]
+    cost = np.hypot(robots[:, None, 0] - slots[None, :, 0], robots[:, None, 1] - slots[None, :, 1])
+    pick = allocate_tasks(cost)
+    out: FloatArray = slots[pick]
+    return out

@@ -1,0 +1,532 @@
+"""One tick of the team: :func:`tactics_step` (the stages are in the package notes)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from firefleet._typing import BoolArray, FloatArray, IntArray
+from firefleet.control.mission._coverage import cone_coverage, line_of_sight
+from firefleet.control.mission._knowledge import fires_of, update_knowledge
+from firefleet.control.mission._params import (
+    CONFIRM,
+    DAMAGED,
+    EXPLORE,
+    FIGHT,
+    IDLE,
+    REFILL,
+    Orders,
+    TacticsObservation,
+    TacticsParams,
+)
+from firefleet.control.mission._plan import (
+    _empty_l,
+    allocate,
+    explore,
+    fire_demand,
+    probe,
+    task_distances,
+)
+from firefleet.control.mission._ring import ring_slots
+from firefleet.control.mission._team import TacticsState
+from firefleet.control.navigation import (
+    Costmap,
+    NavigationInputs,
+    navigation_retarget,
+    navigation_step,
+)
+from firefleet.errors import InputError, as_float_array
+from firefleet.world import OccupancyGrid
+
+__all__ = ["tactics_step"]
+
+_EPS_S = 1e-9
+"""Times this close count as equal (ticks summed in floating point) [s]."""
+
+_MOVE_M = 0.25
+"""A new goal this close to the old one does not re-plan the robot's path [m]."""
+
+
+def _next(due_s: float, period_s: float, t_s: float) -> float:
+    """The next due time after ``t_s``: on the period's grid, or a period from now when
+    the step fell behind (or at the start)."""
+    nxt = due_s + period_s
+    return nxt if nxt > t_s + _EPS_S else t_s + period_s
+
+
+def _wrap(a: FloatArray) -> FloatArray:
+    out: FloatArray = (a + np.pi) % (2.0 * np.pi) - np.pi
+    return out
+
+
+def _retarget(state: TacticsState, goals: FloatArray, pose: FloatArray) -> TacticsState:
+    """New goals into the navigation (NaN: stay where it is) for robots whose goal moved."""
+    old = state.goal_xy_m
+    fin = np.isfinite(goals[:, 0])
+    moved = np.where(
+        fin & np.isfinite(old[:, 0]),
+        np.hypot(goals[:, 0] - old[:, 0], goals[:, 1] - old[:, 1]) > _MOVE_M,
+        fin != np.isfinite(old[:, 0]),
+    )
+    if not moved.any():
+        return replace(state, goal_xy_m=goals)
+    nav_goal = np.where(fin[:, None], goals, pose[:, :2])
+    nav = navigation_retarget(state.nav, nav_goal, moved)
+    closest = state.closest_m.copy()
+    closest[moved] = np.inf
+    since = state.closest_s.copy()
+    since[moved] = max(state.t_s, 0.0)
+    return replace(state, nav=nav, goal_xy_m=goals, closest_m=closest, closest_s=since)
+
+
+def _fight_goals(
+    state: TacticsState,
+    pose: FloatArray,
+    task_fire: IntArray,
+    old_fire: IntArray,
+    goals: FloatArray,
+    params: TacticsParams,
+) -> None:
+    """Ring slots of every fought fire into ``goals`` (kept while its team is unchanged)."""
+    ids, fxy, fext = fires_of(state.knowledge)
+    for j, fid in enumerate(ids):
+        team = np.flatnonzero(task_fire == fid)
+        if len(team) == 0:
+            continue
+        same = np.all(old_fire[team] == fid) and np.sum(old_fire == fid) == len(team)
+        if same and np.isfinite(goals[team, 0]).all():
+            continue
+        radius = fext[j] + params.standoff_m
+        reach = fext[j] + params.spray_range_m
+        goals[team] = ring_slots(
+            state.coarse, state.nav.costmap, fxy[j], radius, reach, pose[team, :2]
+        )
+
+
+def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArray:
+    """Map cells whose centres lie within ``radius_m`` of any point ``xy`` (M, 2)."""
+    grid_shape = grid.shape
+    h, w = grid_shape
+    k = math.ceil(radius_m / grid.resolution_m) + 1
+    out = np.zeros(grid_shape, dtype=bool)
+    for p in xy:
+        r, c = (int(v) for v in grid.cell_of(p))
+        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
+        if r0 >= r1 or c0 >= c1:
+            continue
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        centres = grid.center_of(np.stack([rr, cc], axis=-1))
+        out[r0:r1, c0:c1] |= np.hypot(centres[..., 0] - p[0], centres[..., 1] - p[1]) <= radius_m
+    return out
+
+
+def _fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -> TacticsState:
+    """The navigation costmap round the fires: ``fire_cost`` more per metre within
+    ``fire_keepout_m`` of every burning spot (A* goes round a fire where it can), and
+    the cells within ``fire_block_m`` of one blocked, except within 1 m of a robot (so a
+    robot near a fire can always plan its way out)."""
+    base = state.base_costmap
+    spots = state.knowledge.spot_xy_m
+    if len(spots) == 0:
+        if state.nav.costmap is base:
+            return state
+        return replace(state, nav=replace(state.nav, costmap=base))
+    grid = base.grid
+    near = _disc_mask(grid, spots, params.fire_keepout_m)
+    cost = np.where(near, base.cost + params.fire_cost, base.cost)
+    blocked = np.array(base.blocked)
+    if params.fire_block_m > 0.0:
+        hot = _disc_mask(grid, spots, params.fire_block_m)
+        hot &= ~_disc_mask(grid, pose[:, :2], 1.0)
+        blocked |= hot
+        cost[hot] = np.inf
+    for arr in (cost, blocked):
+        arr.setflags(write=False)
+    costmap = Costmap(base.grid, base.clearance_m, blocked, cost, base.inflation_m)
+    return replace(state, nav=replace(state.nav, costmap=costmap))
+
+
+def _plan(
+    state: TacticsState,
+    pose: FloatArray,
+    tank: FloatArray,
+    working: BoolArray,
+    params: TacticsParams,
+) -> TacticsState:
+    """Allocate fires and victims, then frontiers to the robots left (``_plan`` notes)."""
+    state = _fire_costmap(state, pose, params)
+    n = len(pose)
+    k = state.knowledge
+    ids, fxy, fext = fires_of(k)
+    n_fires = len(ids)
+    open_v = np.flatnonzero(~k.victim_confirmed & ~k.dismissed(params))
+    task_xy = np.vstack([fxy, k.victim_xy_m[open_v]])
+    need = fire_demand(fext, params)
+    cm = state.coarse
+    floor = int(cm.floor.sum())
+    if (cm.floor & ~state.covered_coarse).sum() > 0.02 * floor and n_fires:
+        # floor left to search: keep explore_frac of the team exploring
+        n_work = int((working & (state.mode != REFILL)).sum())
+        budget = max(n_work - math.ceil(params.explore_frac * n_work), n_fires)
+        while need.sum() > budget:
+            need[int(np.argmax(need))] -= 1
+    demand = np.concatenate([need, np.ones(len(open_v), dtype=np.int64)])
+    is_fire = np.arange(len(task_xy)) < n_fires
+    current = np.full(n, -1, dtype=np.int64)
+    for i in range(n):
+        if state.task_fire[i] >= 0 and np.any(ids == state.task_fire[i]):
+            current[i] = int(np.flatnonzero(ids == state.task_fire[i])[0])
+        elif state.task_victim[i] >= 0 and np.any(open_v == state.task_victim[i]):
+            current[i] = n_fires + int(np.flatnonzero(open_v == state.task_victim[i])[0])
+    mode = state.mode.copy()
+    available = working & (mode != REFILL)
+    alloc = np.full(n, -1, dtype=np.int64)
+    if len(task_xy):
+        dist = task_distances(state.coarse, state.memo, task_xy, pose[:, :2])
+        alloc = allocate(dist, demand, is_fire, current, available, tank, params)
+    task_fire = np.full(n, -1, dtype=np.int64)
+    sel = (alloc >= 0) & (alloc < n_fires)
+    task_fire[sel] = ids[alloc[sel]]
+    task_victim = np.full(n, -1, dtype=np.int64)
+    sel = alloc >= n_fires
+    task_victim[sel] = open_v[alloc[sel] - n_fires]
+    goals = state.goal_xy_m.copy()
+    goals[~working] = np.nan
+    # fires: the ring
+    fight = task_fire >= 0
+    goals[fight & (state.task_fire != task_fire)] = np.nan
+    _fight_goals(state, pose, task_fire, state.task_fire, goals, params)
+    mode[fight] = FIGHT
+    # victims: within half the confirmation radius, on the robot's side
+    for i in map(int, np.flatnonzero(task_victim >= 0)):
+        v = k.victim_xy_m[task_victim[i]]
+        if task_victim[i] == state.task_victim[i] and np.isfinite(goals[i, 0]):
+            continue
+        off = pose[i, :2] - v
+        gap = math.hypot(float(off[0]), float(off[1]))
+        spot = v + off * min(1.0, 0.5 * params.confirm_radius_m / max(gap, 1e-9))
+        goals[i] = state.coarse.goal_xy(state.coarse.cell_of(spot[None]))[0]
+        mode[i] = CONFIRM
+    mode[task_victim >= 0] = CONFIRM
+    # the rest explore
+    free = available & (task_fire < 0) & (task_victim < 0)
+    status = state.nav.status
+    keep = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
+    goal_rc = cm.cell_of(np.nan_to_num(state.goal_xy_m, nan=-1e9))
+    goal_open = (
+        np.isfinite(state.goal_xy_m[:, 0]) & ~state.covered_coarse[goal_rc[:, 0], goal_rc[:, 1]]
+    )
+    cells = explore(
+        cm,
+        state.covered_coarse,
+        pose,
+        free,
+        state.explore_cell,
+        keep,
+        goal_open,
+        state.excluded,
+        params,
+    )
+    has = free & (cells[:, 0] >= 0)
+    same = has & np.all(cells == state.explore_cell, axis=1) & keep
+    fresh = has & ~same
+    goals[fresh] = cm.goal_xy(probe(cm, state.covered_coarse, cells[fresh], params.probe_m))
+    mode[has] = EXPLORE
+    idle = free & ~has
+    goals[idle] = np.nan
+    mode[idle] = IDLE
+    new = replace(
+        state,
+        mode=mode,
+        task_fire=task_fire.astype(np.int64),
+        task_victim=task_victim.astype(np.int64),
+        explore_cell=cells,
+        pending=False,
+        messages_sent=state.messages_sent + int(working.sum()),
+    )
+    return _retarget(new, goals, pose)
+
+
+def _orders(
+    state: TacticsState, obs: TacticsObservation, pose: FloatArray, params: TacticsParams
+) -> TacticsState:
+    """Run the navigation controller and turn its commands into the team's orders."""
+    n = len(pose)
+    inputs = NavigationInputs(pose=pose, ranges=obs.ranges, teammates_xy_m=pose[:, :2], t_s=obs.t_s)
+    nav, v, w = navigation_step(state.nav, inputs, params.nav, params.nav_period_s)
+    mode = state.mode
+    # arrived, or stopped short for good (its goal blocked or out of reach)
+    at_goal = np.array([s != "moving" and s != "waiting" for s in nav.status])
+    arrived = at_goal
+    # a fighter or confirmer that has come no closer to its spot in stall_s settles
+    # where it is (navigation told it has arrived, so that no teammate waits for it)
+    # (a refiller too, if that is within refill_radius_m of its spot)
+    d = np.hypot(pose[:, 0] - state.goal_xy_m[:, 0], pose[:, 1] - state.goal_xy_m[:, 1])
+    settle = (
+        ((mode == FIGHT) | (mode == CONFIRM) | ((mode == REFILL) & (d <= params.refill_radius_m)))
+        & ~at_goal
+        & (obs.t_s - state.closest_s >= params.stall_s)
+    )
+    if settle.any():
+        nav = navigation_retarget(nav, pose[:, :2], settle)
+        at_goal = at_goal | settle
+    w_max = params.nav.dwa.omega_max_rad_s
+    spray = np.zeros(n, dtype=bool)
+    ids, fxy, _ = fires_of(state.knowledge)
+    k = state.knowledge
+    for i in map(int, np.flatnonzero(mode == FIGHT)):
+        j = np.flatnonzero(ids == state.task_fire[i])
+        if len(j) == 0:
+            continue
+        c = fxy[int(j[0])]
+        spots = k.spot_xy_m[k.spot_fire == state.task_fire[i]]
+        err = float(_wrap(np.arctan2(c[1] - pose[i, 1], c[0] - pose[i, 0]) - pose[i, 2]))
+        if at_goal[i]:
+            v[i] = 0.0
+            w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
+        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
+        s = int(np.argmin(d))
+        spray[i] = (
+            abs(err) <= params.spray_half_angle_rad
+            and d[s] <= params.spray_range_m
+            and obs.tank_l[i] > 0.0
+            and bool(line_of_sight(state.coarse, pose[i : i + 1, :2], spots[s : s + 1])[0])
+        )
+    for i in map(int, np.flatnonzero((mode == CONFIRM) & at_goal)):
+        vic = k.victim_xy_m[state.task_victim[i]]
+        err = float(_wrap(np.arctan2(vic[1] - pose[i, 1], vic[0] - pose[i, 0]) - pose[i, 2]))
+        v[i] = 0.0
+        w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
+    scan = (mode == EXPLORE) & arrived
+    v[scan] = 0.0
+    w[scan] = params.scan_omega_rad_s
+    refilling = (mode == REFILL) & at_goal
+    stop = (mode == DAMAGED) | refilling | (mode == IDLE)
+    v[stop] = 0.0
+    w[stop] = 0.0
+    nav = replace(nav, command=np.stack([v, w], axis=1))
+    orders = Orders(
+        v_m_s=v,
+        omega_rad_s=w,
+        spray=spray,
+        mode=mode.astype(np.int8),
+        goal_xy_m=state.goal_xy_m.copy(),
+    )
+    return replace(state, nav=nav, orders=orders, refilling=refilling)
+
+
+def _tank_changes(
+    state: TacticsState,
+    pose: FloatArray,
+    tank: FloatArray,
+    working: BoolArray,
+    params: TacticsParams,
+) -> TacticsState:
+    """Empty tanks go to refill at once; full ones come back (an allocation follows)."""
+    mode = state.mode
+    empty = working & (tank <= _empty_l(params)) & (mode != REFILL)
+    full = (mode == REFILL) & (tank >= 0.98 * params.tank_l)
+    if not (empty.any() or full.any()):
+        return state
+    mode = mode.copy()
+    spot = state.refill_spot.copy()
+    goals = state.goal_xy_m.copy()
+    task_fire = state.task_fire.copy()
+    task_victim = state.task_victim.copy()
+    spots = state.refill_spots_m
+    for i in map(int, np.flatnonzero(empty)):
+        used = np.bincount(spot[spot >= 0], minlength=len(spots))
+        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
+        spot[i] = int(np.lexsort((d, used))[0])
+        goals[i] = spots[spot[i]]
+        mode[i] = REFILL
+        task_fire[i] = -1
+        task_victim[i] = -1
+    spot[full] = -1
+    goals[full] = np.nan
+    mode[full] = IDLE
+    new = replace(
+        state,
+        mode=mode,
+        refill_spot=spot,
+        task_fire=task_fire,
+        task_victim=task_victim,
+        pending=True,
+    )
+    return _retarget(new, goals, pose)
+
+
+def _dropped(state: TacticsState, pose: FloatArray, lost: BoolArray) -> TacticsState:
+    """Damaged or dead robots stop for good and leave their tasks (an allocation follows)."""
+    mode = state.mode.copy()
+    mode[lost] = DAMAGED
+    tf = state.task_fire.copy()
+    tv = state.task_victim.copy()
+    tf[lost] = -1
+    tv[lost] = -1
+    goals = state.goal_xy_m.copy()
+    goals[lost] = np.nan
+    spot = state.refill_spot.copy()
+    spot[lost] = -1
+    new = replace(
+        state,
+        mode=mode,
+        task_fire=tf,
+        task_victim=tv,
+        refill_spot=spot,
+        known_damaged=state.known_damaged | lost,
+        pending=True,
+    )
+    new = _retarget(new, goals, pose)
+    nav = navigation_retarget(new.nav, pose[:, :2], lost)  # arrived at once: no one waits for it
+    return replace(new, nav=nav)
+
+
+def _watchdog(
+    state: TacticsState, pose: FloatArray, t: float, params: TacticsParams
+) -> TacticsState:
+    """Explorers that neither reach their goal nor come 0.2 m closer to it in
+    ``stall_s`` (or stand within the goal tolerance of it without navigation calling
+    it reached) give their frontier up; the team re-plans."""
+    goal = state.goal_xy_m
+    d = np.hypot(pose[:, 0] - goal[:, 0], pose[:, 1] - goal[:, 1])
+    better = np.isfinite(d) & (d < state.closest_m - 0.2)
+    closest = np.where(better, d, state.closest_m)
+    since = np.where(better, t, state.closest_s)
+    explorers = state.mode == EXPLORE
+    stalled = explorers & np.isfinite(d) & (t - since >= params.stall_s)
+    near = explorers & (d <= params.nav.goal_tolerance_m)
+    if not (stalled.any() or near.any()):
+        return replace(state, closest_m=closest, closest_s=since)
+    excluded = state.excluded
+    if stalled.any():
+        excluded = excluded.copy()
+        for i in map(int, np.flatnonzero(stalled)):
+            for rc in (state.explore_cell[i], state.coarse.cell_of(goal[i])):
+                if rc[0] >= 0:
+                    excluded[rc[0], rc[1]] = True
+        since = np.where(stalled, t, since)
+    return replace(state, closest_m=closest, closest_s=since, excluded=excluded, pending=True)
+
+
+def tactics_step(
+    state: TacticsState, obs: TacticsObservation, params: TacticsParams, dt_s: float
+) -> tuple[TacticsState, Orders]:
+    """The team's orders for one tick.
+
+    Every tick: the detections join the team's knowledge (a change marks the plan
+    stale), damaged robots are dropped, empty tanks are sent to refill and full ones
+    brought back. At ``coverage_period_s``: the cameras' cones join the coverage. When
+    the plan is stale and ``replan_s`` has passed since the last one, or
+    ``explore_replan_s`` has passed: the allocation and the frontiers (``_plan``). At
+    ``nav_period_s``: the navigation controller and the orders (arrived fighters turn to
+    their fire and spray while it is in reach and in sight; arrived explorers look
+    around; confirmers face their victim); in between, the last orders hold.
+
+    Parameters
+    ----------
+    state : TacticsState
+        From :func:`tactics_init` or the previous step.
+    obs : TacticsObservation
+        What the team knows this tick.
+    params : TacticsParams
+    dt_s : float
+        The tick [s] (only checked: the periods are the parameters').
+
+    Returns
+    -------
+    state : TacticsState
+    orders : Orders
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.world import load_map
+    >>> from firefleet.control.mission import (
+    ...     MODES, TacticsObservation, TacticsParams, tactics_init, tactics_step)
+    >>> params = TacticsParams()
+    >>> pose = np.array([[1.0, 5.0, 0.0], [1.5, 4.6, 0.0]])
+    >>> state = tactics_init(load_map("office"), pose, params)
+    >>> obs = TacticsObservation(
+    ...     t_s=0.0, pose_m=pose, fire_xy_m=np.zeros((0, 2)), fire_robot=np.zeros(0, int),
+    ...     person_xy_m=np.zeros((0, 2)), person_robot=np.zeros(0, int), ranges={},
+    ...     tank_l=np.full(2, 20.0), damaged=np.zeros(2, bool), alive=np.ones(2, bool))
+    >>> state, orders = tactics_step(state, obs, params, 0.01)
+    >>> [MODES[m] for m in orders.mode], bool(np.all(orders.v_m_s >= 0.0))
+    (['explore', 'explore'], True)
+    >>> bool(state.covered.any()), orders.goal_xy_m.shape
+    (True, (2, 2))
+    """
+    if not (math.isfinite(dt_s) and dt_s > 0.0):
+        raise InputError(f"dt_s must be > 0, got {dt_s!r}")
+    start = state
+    n = len(state.mode)
+    t = float(obs.t_s)
+    pose = as_float_array(obs.pose_m, "obs.pose_m", (n, 3))
+    tank = np.asarray(obs.tank_l, dtype=float)
+    working = np.asarray(obs.alive, dtype=bool) & ~np.asarray(obs.damaged, dtype=bool)
+    if tank.shape != (n,) or working.shape != (n,):
+        raise InputError(f"obs.tank_l, damaged and alive must hold one value per robot ({n})")
+    lost = ~working & ~state.known_damaged
+    if lost.any():
+        state = _dropped(state, pose, lost)
+    looked = working if obs.looked is None else working & np.asarray(obs.looked, dtype=bool)
+    fire_xy = np.asarray(obs.fire_xy_m, dtype=float).reshape(-1, 2)
+    person_xy = np.asarray(obs.person_xy_m, dtype=float).reshape(-1, 2)
+    if len(fire_xy) or len(person_xy) or (looked.any() and len(state.knowledge.spot_xy_m)):
+        know, changed = update_knowledge(
+            state.knowledge,
+            state.coarse,
+            pose,
+            fire_xy,
+            np.asarray(obs.fire_robot, dtype=np.int64),
+            person_xy,
+            np.asarray(obs.person_robot, dtype=np.int64),
+            looked,
+            t,
+            params,
+        )
+        state = replace(
+            state,
+            knowledge=know,
+            pending=state.pending or changed,
+            messages_sent=state.messages_sent + len(fire_xy) + len(person_xy),
+        )
+    state = _tank_changes(state, pose, tank, working, params)
+    if t >= state.next_coverage_s - _EPS_S:
+        rows, cols = cone_coverage(
+            state.coarse, pose[working], params.sensing_range_m, params.hfov_rad
+        )
+        covered = state.covered_coarse.copy()
+        covered[rows, cols] = True
+        state = replace(
+            state,
+            covered_coarse=covered,
+            next_coverage_s=_next(state.next_coverage_s, params.coverage_period_s, t),
+        )
+    if t >= state.next_nav_s - _EPS_S:
+        status = state.nav.status
+        explorers = np.flatnonzero(state.mode == EXPLORE)
+        stuck = [i for i in explorers if status[i] in ("unreachable", "goal_blocked")]
+        if stuck:
+            excluded = state.excluded.copy()
+            for i in stuck:
+                r, c = state.explore_cell[i]
+                if r >= 0:
+                    excluded[r, c] = True
+            state = replace(state, excluded=excluded, pending=True)
+        if any(status[i] == "arrived" for i in explorers):
+            state = replace(state, pending=True)
+        state = _watchdog(state, pose, t, params)
+    since = t - state.last_plan_s
+    if (state.pending and since >= params.replan_s) or since >= params.explore_replan_s:
+        state = _plan(state, pose, tank, working, params)
+        state = replace(state, last_plan_s=t)
+    if t >= state.next_nav_s - _EPS_S:
+        state = _orders(state, obs, pose, params)
+        state = replace(state, next_nav_s=_next(state.next_nav_s, params.nav_period_s, t))
+    if state is start:  # a quiet tick: the held orders, nothing to copy
+        return state, state.orders
+    return replace(state, t_s=t), state.orders

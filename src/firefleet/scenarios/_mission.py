@@ -1,0 +1,177 @@
+"""The firefighting mission's scenario keys: fires, victims and fuel in ``world:``, the
+thermal camera in ``sensors:``, and the ``mission`` command.
+
+::
+
+    world:
+      map: office
+      fires: [{x_m: 15.0, y_m: 8.0, start_s: 0.0}]
+      victims: [{x_m: 12.0, y_m: 3.0}]
+      fuel: {default: 1.0, regions: [{x_m: [0, 4], y_m: [0, 4], load: 2.0}]}
+      field_cell_m: 0.25          # the fire, heat and smoke grids' cell
+    sensors: {thermal: {}, ultrasonic: {count: 8}}
+    command:
+      kind: mission
+      robots: true                # false: the same world without the team (the baseline)
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import pydantic
+
+from firefleet.errors import InputError, check_fields
+from firefleet.scenarios._claims import _STRICT
+
+__all__ = ["FireSpec", "FuelRegion", "FuelSpec", "Mission", "ThermalSpec", "VictimSpec"]
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class FireSpec:
+    """A fire that starts at ``(x_m, y_m)`` at ``start_s`` (the cell there ignites)."""
+
+    x_m: float
+    y_m: float
+    start_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.x_m) and math.isfinite(self.y_m)):
+            raise InputError(f"world.fires: position ({self.x_m}, {self.y_m}) must be finite")
+        if not (math.isfinite(self.start_s) and self.start_s >= 0.0):
+            raise InputError(f"world.fires: start_s must be >= 0, got {self.start_s}")
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class VictimSpec:
+    """A person at ``(x_m, y_m)`` (at 37 C, breathing the air there)."""
+
+    x_m: float
+    y_m: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.x_m) and math.isfinite(self.y_m)):
+            raise InputError(f"world.victims: position ({self.x_m}, {self.y_m}) must be finite")
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class FuelRegion:
+    """A rectangle ``x_m: [x0, x1]``, ``y_m: [y0, y1]`` of relative fuel load ``load``."""
+
+    x_m: tuple[float, float]
+    y_m: tuple[float, float]
+    load: float
+
+    def __post_init__(self) -> None:
+        if not (self.x_m[0] < self.x_m[1] and self.y_m[0] < self.y_m[1]):
+            raise InputError(
+                f"world.fuel.regions: x_m {list(self.x_m)} and y_m {list(self.y_m)} must "
+                "each be [low, high]"
+            )
+        if not (math.isfinite(self.load) and self.load >= 0.0):
+            raise InputError(f"world.fuel.regions: load must be >= 0, got {self.load}")
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class FuelSpec:
+    """Relative fuel load of the open cells (1: an office's furnishings; walls 0)."""
+
+    default: float = 1.0
+    regions: tuple[FuelRegion, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.default) and self.default >= 0.0):
+            raise InputError(f"world.fuel.default must be >= 0, got {self.default}")
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class ThermalSpec:
+    """The Lepton on every robot (deliverable section 2.7.1: 80 x 60, 51 deg, 9 Hz).
+
+    Attributes
+    ----------
+    rate_hz : float
+        Frames per second (the Lepton's 8.7 Hz export rate, rounded).
+    supersample : int
+        Rays per pixel along each axis of the simulated frame.
+    netd_k : float
+        Temporal noise, 1 sigma [K].
+    """
+
+    rate_hz: float = 9.0
+    supersample: int = 2
+    netd_k: float = 0.05
+
+    def __post_init__(self) -> None:
+        check_fields(self, "sensors.thermal", positive=("rate_hz", "supersample"))
+        check_fields(self, "sensors.thermal", non_negative=("netd_k",))
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class Mission:
+    """The firefighting mission: explore, find fires and people, put the fires out.
+
+    Attributes
+    ----------
+    robots : bool
+        Whether the team takes part; false runs the same world alone (the baseline).
+    standoff_m : float
+        Distance from a fire's edge at which its robots ring it [m].
+    tank_l : float
+        Each robot's water tank [L].
+    flow_l_s : float
+        Its pump's flow while spraying [L/s].
+    spray_range_m : float
+        Reach of its jet [m].
+    rating_c : float
+        Air temperature a robot survives; hotter air damages it and it stops [C]
+        (electronics in a sealed, insulated and water-cooled shell, as firefighting
+        robots are built: a few hundred degrees for minutes).
+    robot_radius_m : float
+        Radius of the robot's disc [m].
+    world_step_s : float
+        Step of the fire, heat, smoke and victims [s].
+    record_s : float
+        Recording period [s] (poses and the fields; about 1 Hz).
+
+    Examples
+    --------
+    >>> from firefleet.scenarios._mission import Mission
+    >>> Mission(kind="mission").tank_l
+    20.0
+    """
+
+    kind: Literal["mission"]
+    robots: bool = True
+    standoff_m: float = 2.0
+    tank_l: float = 20.0
+    flow_l_s: float = 0.5
+    spray_range_m: float = 3.5
+    rating_c: float = 300.0
+    robot_radius_m: float = 0.15
+    world_step_s: float = 0.1
+    record_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        check_fields(
+            self,
+            "command",
+            positive=(
+                "standoff_m",
+                "tank_l",
+                "flow_l_s",
+                "spray_range_m",
+                "rating_c",
+                "robot_radius_m",
+                "world_step_s",
+                "record_s",
+            ),
+        )
+
+    def check_team(self, n_robots: int, duration_s: float) -> None:
+        """The record and world steps must fit the duration."""
+        if self.record_s > duration_s:
+            raise InputError(
+                f"command.record_s {self.record_s:g} is longer than duration_s {duration_s:g}"
+            )

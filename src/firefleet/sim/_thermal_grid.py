@@ -1,0 +1,325 @@
+"""The thermal camera on a grid world: walls, flames, hot gas and people from the world's
+fields (the mission's sensor; the segment scenes of :func:`render_thermal` are the
+reference it is tested against).
+
+The building is the grid's occupied cells extruded from the floor to ``wall_height_m``;
+every open cell carries the temperature of the world's heat field, which its floor and
+ceiling patches and the wall faces next to it show (the field is the temperature of the
+hot gas layer and of the surfaces it heats: a single-zone simplification, stated); a
+burning cell holds a flame ``flame_height_m`` tall at its field temperature (the flame
+temperature), opaque; people are upright billboards facing the camera (by default a
+person standing, 0.5 m x 1.7 m: the size prior of :func:`perception.thermal.detect`) at
+body temperature. Smoke does not enter: the
+Lepton's 8-14 um band passes smoke that blinds visible light (soot's extinction falls
+with wavelength, roughly as 1/lambda: at 10 um it is about a twentieth of that at
+0.5 um; Widmann 2003).
+
+Each column of the image is one horizontal ray walked through the grid cell by cell
+(Amanatides and Woo's traversal) to the first wall; each pixel of the column then
+finds what it meets along that walk (floor or ceiling, a flame, a person, the wall).
+
+References
+----------
+J. Amanatides and A. Woo, "A fast voxel traversal algorithm for ray tracing",
+Eurographics 1987. J. F. Widmann, "Evaluation of the Planck mean absorption
+coefficients for radiation transport through smoke", Combust. Sci. Technol. 175, 2003.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike
+
+from firefleet._typing import FloatArray
+from firefleet.errors import InputError, as_float_array, check_fields
+from firefleet.world import BODY_C, OccupancyGrid
+
+__all__ = ["GridThermalScene", "grid_thermal_celsius"]
+
+_INF = np.inf
+
+
+@dataclass(frozen=True)
+class GridThermalScene:
+    """What a grid world shows a thermal camera, besides its fields.
+
+    Attributes
+    ----------
+    wall_height_m : float
+        Height of the walls and the ceiling [m].
+    flame_height_m : float
+        Height of the flame over a burning cell [m] (a room-contents fire: 0.5-1.5 m).
+    person_size_m : (float, float)
+        Width and height of a person's billboard [m] (standing: 0.5, 1.7, the
+        detector's prior; a person lying down is about 1.7 x 0.4, which the detector's
+        standing prior does not take for a person).
+    person_c : float
+        Apparent temperature of a person [C] (clothed skin: a little under the core's
+        37 C; the default is the core temperature, the deliverable's figure).
+    outside_c : float
+        What a ray that leaves the grid meets [C].
+    ceiling : bool
+        Whether there is a ceiling (else rays above the walls meet ``outside_c``).
+    layer_height_m : float
+        Height of the interface between a room fire's hot upper layer and its cooler
+        lower layer [m] (two-zone model): the floor and the walls below it show
+        ``ambient_c + lower_fraction (T - ambient_c)`` of the field's temperature T.
+    lower_fraction : float
+        The lower layer's share of the field's temperature rise (1: one zone, the
+        field everywhere).
+    ambient_c : float
+        Ambient temperature [C] of that rise.
+
+    Examples
+    --------
+    >>> from firefleet.sim._thermal_grid import GridThermalScene
+    >>> GridThermalScene().person_size_m
+    (0.5, 1.7)
+    """
+
+    wall_height_m: float = 2.5
+    flame_height_m: float = 1.0
+    person_size_m: tuple[float, float] = (0.5, 1.7)
+    person_c: float = BODY_C
+    outside_c: float = 10.0
+    ceiling: bool = True
+    layer_height_m: float = 1.2
+    lower_fraction: float = 1.0
+    ambient_c: float = 20.0
+
+    def __post_init__(self) -> None:
+        check_fields(self, "thermal_scene", positive=("wall_height_m", "flame_height_m"))
+        if len(self.person_size_m) != 2 or min(self.person_size_m) <= 0:
+            raise InputError(
+                f"thermal_scene.person_size_m: {self.person_size_m!r}, expected (width, height) > 0"
+            )
+
+
+@numba.njit(cache=True)
+def _walk(
+    x0: float,
+    y0: float,
+    ux: float,
+    uy: float,
+    occ: np.ndarray,
+    temp: np.ndarray,
+    burn: np.ndarray,
+    res: float,
+    s_out: np.ndarray,
+    t_out: np.ndarray,
+    b_out: np.ndarray,
+) -> tuple[int, float, float]:  # pragma: no cover - compiled
+    """Walk the unit horizontal direction (ux, uy) from (x0, y0) (grid frame: metres from
+    the lower-left corner, rows from the bottom). Fills, per open cell crossed, its exit
+    distance ``s_out`` [m], temperature and burning flag; returns the number of cells,
+    the distance to the wall face (inf when the ray leaves the grid) and the wall's
+    temperature (that of the last open cell)."""
+    h, w = occ.shape
+    ix = int(np.floor(x0 / res))
+    iy = int(np.floor(y0 / res))
+    step_x = 1 if ux > 0 else -1
+    step_y = 1 if uy > 0 else -1
+    if ux != 0.0:
+        next_x = ((ix + (1 if ux > 0 else 0)) * res - x0) / ux
+        dt_x = res / abs(ux)
+    else:
+        next_x = np.inf
+        dt_x = np.inf
+    if uy != 0.0:
+        next_y = ((iy + (1 if uy > 0 else 0)) * res - y0) / uy
+        dt_y = res / abs(uy)
+    else:
+        next_y = np.inf
+        dt_y = np.inf
+    n = 0
+    last_t = temp[iy, ix] if 0 <= iy < h and 0 <= ix < w else 20.0
+    cap = s_out.size
+    while True:
+        if ix < 0 or iy < 0 or ix >= w or iy >= h:
+            return n, np.inf, last_t
+        s_enter = 0.0 if n == 0 else s_out[n - 1]
+        if occ[iy, ix]:
+            return n, s_enter, last_t
+        s_exit = min(next_x, next_y)
+        if n >= cap:
+            return n, np.inf, last_t
+        s_out[n] = s_exit
+        t_out[n] = temp[iy, ix]
+        b_out[n] = burn[iy, ix]
+        last_t = temp[iy, ix]
+        n += 1
+        if next_x < next_y:
+            ix += step_x
+            next_x += dt_x
+        else:
+            iy += step_y
+            next_y += dt_y
+
+
+@numba.njit(cache=True)
+def _render(
+    poses: np.ndarray,
+    occ: np.ndarray,
+    temp: np.ndarray,
+    burn: np.ndarray,
+    res: float,
+    people: np.ndarray,
+    xn: np.ndarray,
+    yn: np.ndarray,
+    mount_h: float,
+    wall_h: float,
+    flame_h: float,
+    person_w: float,
+    person_h: float,
+    person_c: float,
+    outside_c: float,
+    ceiling: bool,
+    layer_h: float,
+    lower: float,
+    ambient: float,
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """Apparent temperature of every ray and its depth along the optical axis [m]
+    (inf where it leaves the grid), each of shape (N, len(yn), len(xn))."""
+    n_robots = poses.shape[0]
+    n_rows = yn.size
+    n_cols = xn.size
+    out = np.empty((n_robots, n_rows, n_cols))
+    depth = np.empty((n_robots, n_rows, n_cols))
+    cap = 4 * (occ.shape[0] + occ.shape[1]) + 8
+    s_out = np.empty(cap)
+    t_out = np.empty(cap)
+    b_out = np.zeros(cap, dtype=np.bool_)
+    n_people = people.shape[0]
+    s_people = np.empty(n_people)
+    for k in range(n_robots):
+        x0, y0, th = poses[k, 0], poses[k, 1], poses[k, 2]
+        ct, st = np.cos(th), np.sin(th)
+        for c in range(n_cols):
+            dx = ct + xn[c] * st
+            dy = st - xn[c] * ct
+            length = np.sqrt(dx * dx + dy * dy)
+            ux, uy = dx / length, dy / length
+            n, s_wall, t_wall = _walk(x0, y0, ux, uy, occ, temp, burn, res, s_out, t_out, b_out)
+            for v in range(n_people):  # each person's billboard, facing the camera
+                px, py = people[v, 0] - x0, people[v, 1] - y0
+                dist = np.sqrt(px * px + py * py)
+                s_people[v] = np.inf
+                if dist < 1e-9:
+                    continue
+                ex, ey = -py / dist * person_w, px / dist * person_w  # the billboard's width
+                wx, wy = px - 0.5 * ex, py - 0.5 * ey  # its right edge
+                den = ux * ey - uy * ex
+                if den == 0.0:
+                    continue
+                s = (wx * ey - wy * ex) / den
+                u = (wx * uy - wy * ux) / den
+                if s > 1e-9 and 0.0 <= u <= 1.0:
+                    s_people[v] = s
+            for r in range(n_rows):
+                slope = -yn[r] / length  # height gained per horizontal metre
+                best = s_wall
+                best_t = t_wall if s_wall < np.inf else outside_c
+                if s_wall < np.inf and mount_h + slope * s_wall < layer_h:
+                    best_t = ambient + lower * (t_wall - ambient)  # below the hot layer
+                # floor or ceiling, where the ray meets it
+                s_plane = np.inf
+                if slope < 0.0:
+                    s_plane = mount_h / -slope
+                elif slope > 0.0 and ceiling:
+                    s_plane = (wall_h - mount_h) / slope
+                if s_plane < best:
+                    best = s_plane
+                    # the cell holding that point: the first whose exit lies beyond it
+                    lo, hi = 0, n
+                    while lo < hi:
+                        mid = (lo + hi) // 2
+                        if s_out[mid] < s_plane:
+                            lo = mid + 1
+                        else:
+                            hi = mid
+                    best_t = t_out[lo] if lo < n else outside_c
+                    if slope < 0.0 and lo < n:  # the floor, under the hot layer
+                        best_t = ambient + lower * (best_t - ambient)
+                elif s_wall == np.inf and best == np.inf:
+                    best_t = outside_c
+                # flames: the first burning cell whose column of flame the ray crosses
+                for i in range(n):
+                    s0 = 0.0 if i == 0 else s_out[i - 1]
+                    if s0 >= best:
+                        break
+                    if not b_out[i]:
+                        continue
+                    z0 = mount_h + slope * s0
+                    z1 = mount_h + slope * s_out[i]
+                    if min(z0, z1) <= flame_h and max(z0, z1) >= 0.0:
+                        s_hit = s0 if z0 <= flame_h else s0 + (flame_h - z0) / slope
+                        if s_hit < best:
+                            best = s_hit
+                            best_t = t_out[i]
+                        break
+                for v in range(n_people):
+                    s = s_people[v]
+                    if s < best:
+                        z = mount_h + slope * s
+                        if 0.0 <= z <= person_h:
+                            best = s
+                            best_t = person_c
+                out[k, r, c] = best_t
+                depth[k, r, c] = best / length  # forward component of the unit ray: 1/length
+    return out, depth
+
+
+def grid_thermal_celsius(
+    poses: ArrayLike,
+    grid: OccupancyGrid,
+    temperature_c: ArrayLike,
+    burning: ArrayLike,
+    people_xy_m: ArrayLike,
+    xn: FloatArray,
+    yn: FloatArray,
+    mount_height_m: float,
+    scene: GridThermalScene,
+) -> tuple[FloatArray, FloatArray]:
+    """The temperature each ray ``(xn[c], yn[r])`` meets [C] and the depth of what it
+    meets along the optical axis [m] (inf: nothing on the grid), each (N, R, C).
+
+    Rays in the camera's normalised coordinates (x right, y down, axis horizontal along
+    each robot's heading), from ``mount_height_m`` above the floor.
+    """
+    pose = as_float_array(poses, "poses", (None, 3))
+    h, w = grid.shape
+    temp = as_float_array(temperature_c, "temperature_c", (h, w))
+    burn = np.asarray(burning, dtype=bool)
+    if burn.shape != (h, w):
+        raise InputError(f"burning: shape {burn.shape}, expected the grid's {(h, w)}")
+    people = as_float_array(people_xy_m, "people_xy_m", (None, 2))
+    ox, oy = grid.origin_m
+    local = pose.copy()
+    local[:, 0] -= ox
+    local[:, 1] -= oy
+    people_local = people - np.array([ox, oy])
+    temps, depth = _render(
+        local,
+        np.ascontiguousarray(grid.occupied[::-1]),
+        np.ascontiguousarray(temp[::-1], dtype=np.float64),
+        np.ascontiguousarray(burn[::-1]),
+        grid.resolution_m,
+        np.ascontiguousarray(people_local),
+        np.ascontiguousarray(xn, dtype=np.float64),
+        np.ascontiguousarray(yn, dtype=np.float64),
+        float(mount_height_m),
+        scene.wall_height_m,
+        scene.flame_height_m,
+        float(scene.person_size_m[0]),
+        float(scene.person_size_m[1]),
+        scene.person_c,
+        scene.outside_c,
+        scene.ceiling,
+        scene.layer_height_m,
+        scene.lower_fraction,
+        scene.ambient_c,
+    )
+    return np.asarray(temps), np.asarray(depth)

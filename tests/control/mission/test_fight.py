@@ -1,0 +1,162 @@
+"""Fighting a fire: the ring, refilling, a damaged robot replaced; finding victims."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from firefleet.control.mission import MODES, TacticsParams
+from tests.control.mission._harness import World
+from tests.control.mission.test_team import FAST_NAV, room
+
+FIGHT, REFILL, DAMAGED, EXPLORE = (
+    MODES.index(m) for m in ("fight", "refill", "damaged", "explore")
+)
+FIRE = np.array([[6.0, 5.0]])
+
+
+def settled(world: World, team: np.ndarray) -> bool:
+    """Every robot of ``team`` fights, stands still and sprays."""
+    o = world.orders
+    assert o is not None
+    return bool(
+        np.all(o.mode[team] == FIGHT) and np.all(o.spray[team]) and np.all(o.v_m_s[team] == 0)
+    )
+
+
+def test_four_robots_ring_a_fire_at_the_regular_spacing() -> None:
+    """A fire needing 4 robots: they stand on the ring of radius standoff about it at
+    90 deg +- 6 deg from each other (the regular law's polygon), distance +- 0.12 m,
+    facing it and spraying."""
+    p = TacticsParams(
+        nav=FAST_NAV, fire_robots_min=4, fire_robots_max=4, sensing_range_m=6.0, explore_frac=0.0
+    )
+    start = np.array([[1.5, y, 0.0] for y in (3.5, 4.5, 5.5, 6.5)])
+    world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
+    team = np.arange(4)
+    world.run(90.0, until=lambda w: w.t_s > 5.0 and settled(w, team))
+    assert settled(world, team), world.t_s
+    rel = world.pose[:, :2] - FIRE[0]
+    dist = np.hypot(*rel.T)
+    assert np.all(np.abs(dist - p.standoff_m) <= 0.12), dist
+    ang = np.sort(np.degrees(np.arctan2(rel[:, 1], rel[:, 0])) % 360.0)
+    gaps = np.diff(np.append(ang, ang[0] + 360.0))
+    assert np.all(np.abs(gaps - 90.0) <= 6.0), gaps
+    # each faces the fire within the spray's half angle
+    bearing = np.arctan2(-rel[:, 1], -rel[:, 0])
+    off = np.abs((bearing - world.pose[:, 2] + np.pi) % (2 * np.pi) - np.pi)
+    assert np.all(off <= p.spray_half_angle_rad)
+    assert world.state.assignment.tolist() == [0, 0, 0, 0]
+
+
+def test_an_empty_tank_goes_to_refill_and_comes_back() -> None:
+    p = TacticsParams(
+        nav=FAST_NAV,
+        fire_robots_min=1,
+        fire_robots_max=1,
+        sensing_range_m=6.0,
+        tank_l=5.0,
+        flow_l_s=0.5,
+        refill_l_s=1.0,
+        refill_xy_m=(1.5, 2.0),
+    )
+    world = World(room(), p, np.array([[1.5, 5.0, 0.0]]), fire_xy=FIRE, water_l=1e9)
+    world.run(120.0)
+    mode = np.array([e["mode"][0] for e in world.log])
+    tank = np.array([e["tank"][0] for e in world.log])
+    spray = np.array([e["spray"][0] for e in world.log])
+    pose = np.array([e["pose"][0] for e in world.log])
+    first_refill = int(np.argmax(mode == REFILL))
+    assert spray[:first_refill].any()
+    assert first_refill > 0
+    assert tank[first_refill] < 0.1 * p.tank_l  # it left because the tank ran dry
+    # refilled at the refill point
+    at_point = np.hypot(pose[:, 0] - 1.5, pose[:, 1] - 2.0) <= p.refill_radius_m
+    full_again = first_refill + int(np.argmax(tank[first_refill:] >= 0.98 * p.tank_l))
+    assert full_again > first_refill
+    assert at_point[full_again]
+    # and back on the ring, spraying again
+    ring = np.abs(np.hypot(*(pose[:, :2] - FIRE[0]).T) - p.standoff_m) <= 0.12
+    back = full_again + np.flatnonzero((spray & ring & (mode == FIGHT))[full_again:])
+    assert len(back), "never back on the ring spraying"
+
+
+def test_a_damaged_robots_task_is_reassigned() -> None:
+    p = TacticsParams(
+        nav=FAST_NAV, fire_robots_min=2, fire_robots_max=2, sensing_range_m=6.0, explore_frac=0.0
+    )
+    start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0], [1.5, 8.5, 0.0]])
+    world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
+    world.run(
+        60.0, until=lambda w: w.t_s > 5.0 and settled(w, np.flatnonzero(w.state.task_fire >= 0))
+    )
+    fighters = np.flatnonzero(world.state.task_fire >= 0)
+    assert len(fighters) == 2
+    spare = int(np.setdiff1d(np.arange(3), fighters)[0])
+    hit = int(fighters[0])
+    world.damaged[hit] = True
+    world.run(2.0)
+    s = world.state
+    assert s.mode[hit] == DAMAGED
+    assert s.task_fire[hit] == -1
+    assert s.task_fire[spare] >= 0  # the spare robot took over
+    assert world.orders is not None
+    assert world.orders.v_m_s[hit] == 0.0
+    team = np.flatnonzero(s.task_fire >= 0)
+    world.run(60.0, until=lambda w: settled(w, team))
+    assert settled(world, team)
+    rel = world.pose[team, :2] - FIRE[0]
+    assert np.all(np.abs(np.hypot(*rel.T) - p.standoff_m) <= 0.12)
+
+
+def test_victims_are_confirmed_from_within_2_m_and_the_fire_goes_out() -> None:
+    p = TacticsParams(nav=FAST_NAV, sensing_range_m=4.0)
+    people = np.array([[10.0, 8.5], [2.0, 1.5]])
+    fire = FIRE + np.array([[0.0, 0.0], [0.3, 0.0], [0.0, 0.3]])
+    world = World(
+        room(),
+        p,
+        np.array([[1.5, 5.0, 0.0], [1.5, 6.0, 0.0]]),
+        fire_xy=fire,
+        people_xy=people,
+        water_l=2.0,
+    )
+    world.run(
+        240.0,
+        until=lambda w: (
+            not w.burning.any()
+            and len(w.state.victims_xy_m) == 2
+            and w.state.victims_confirmed.all()
+            and len(w.state.fires_xy_m) == 0
+        ),
+    )
+    s = world.state
+    assert not world.burning.any()
+    assert len(s.fires_xy_m) == 0  # believed out too
+    assert s.victims_confirmed.all()
+    assert len(s.victims_xy_m) == 2
+    times = np.array([e for e in s.victims_confirmed_s])
+    for v, t in zip(s.victims_xy_m, times, strict=True):
+        truth = people[np.argmin(np.hypot(*(people - v).T))]
+        assert np.hypot(*(v - truth)) < 0.05  # detections are exact in the harness
+        k = round(t / world.dt_s)
+        poses = world.log[k]["pose"]
+        assert np.hypot(*(poses[:, :2] - truth).T).min() <= p.confirm_radius_m
+
+
+def test_a_third_of_the_team_keeps_exploring_while_floor_is_unsearched() -> None:
+    """A fire asking for all 3 robots gets 2 while the room is not covered: ceil(0.3 x 3)
+    = 1 explores; with explore_frac = 0 it gets all 3."""
+    start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0], [1.5, 6.5, 0.0]])
+    for frac, fighters in ((0.3, 2), (0.0, 3)):
+        p = TacticsParams(
+            nav=FAST_NAV,
+            fire_robots_min=3,
+            fire_robots_max=3,
+            sensing_range_m=6.0,
+            explore_frac=frac,
+        )
+        world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
+        world.run(3.0)
+        assert world.state.explored_frac < 0.9
+        assert int((world.state.task_fire >= 0).sum()) == fighters
+        assert int((world.state.mode == EXPLORE).sum()) == 3 - fighters

@@ -1,0 +1,168 @@
+"""The mission kind: the issue's YAML as printed, bad input, the baseline, the world's
+physics at the robots, and detections that come from the detector."""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import firefleet
+from firefleet.sim.kinds._mission_world import LOWER_LAYER, lower_layer
+from firefleet.sim.kinds.mission import baseline_burned_area_m2, mission_metrics, mission_world
+from firefleet.world import BURNING, UNBURNT
+
+ISSUE_YAML = """\
+name: office-fire
+title: three robots, one fire, one victim
+duration_s: 600.0
+poses: [[1.0, 1.0, 0.0], [1.0, 2.0, 0.0], [1.0, 3.0, 0.0]]
+world:
+  map: office
+  fires: [{x_m: 15.0, y_m: 8.0, start_s: 0.0}]
+  victims: [{x_m: 12.0, y_m: 3.0}]
+  fuel: {default: 1.0}              # relative fuel load; optional per-region overrides
+sensors: {thermal: {}, ultrasonic: {count: 8}}
+command:
+  kind: mission
+  robots: true                      # false runs the same world without the team: the baseline
+"""
+
+
+def _write(tmp_path: Path, text: str, name: str = "mission.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_the_issue_yaml_validates_as_printed(tmp_path: Path) -> None:
+    scenario = firefleet.load_scenario(_write(tmp_path, ISSUE_YAML))
+    assert scenario.command.kind == "mission"
+    assert scenario.world is not None
+    assert scenario.world.fires[0].x_m == 15.0
+    assert scenario.world.victims[0].y_m == 3.0
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "says"),
+    [
+        (
+            "fires: [{x_m: 15.0, y_m: 8.0",
+            "fires: [{x_m: 4.0, y_m: 2.0",
+            "world.fires[0]: (4, 2) is inside a wall",
+        ),
+        (
+            "victims: [{x_m: 12.0, y_m: 3.0}]",
+            "victims: [{x_m: 30.0, y_m: 3.0}]",
+            "world.victims[0]: (30, 3) is off the map",
+        ),
+        (
+            "victims: [{x_m: 12.0, y_m: 3.0}]",
+            "victims: [{x_m: 4.0, y_m: 2.0}]",
+            "world.victims[0]: (4, 2) is inside a wall",
+        ),
+        (
+            "fuel: {default: 1.0}",
+            "fuel: {default: 1.0, regions: [{x_m: [30, 40], y_m: [0, 1], load: 2}]}",
+            "world.fuel.regions[0]",
+        ),
+        (
+            "sensors: {thermal: {}, ultrasonic: {count: 8}}",
+            "sensors: {ultrasonic: {count: 8}}",
+            "sensors.thermal",
+        ),
+        (
+            "poses: [[1.0, 1.0, 0.0], [1.0, 2.0, 0.0], [1.0, 3.0, 0.0]]",
+            "poses: []",
+            "poses must list at least one robot",
+        ),
+    ],
+)
+def test_bad_mission_input_is_one_line_exit_2(
+    tmp_path: Path, old: str, new: str, says: str
+) -> None:
+    assert old in ISSUE_YAML
+    path = _write(tmp_path, ISSUE_YAML.replace(old, new))
+    done = subprocess.run(
+        [sys.executable, "-m", "firefleet.cli", "validate", str(path)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 2
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert says in lines[0]
+
+
+OFFICE = Path(__file__).resolve().parents[2] / "examples" / "missions" / "mission-office.yaml"
+
+
+def _short(name: Path, duration_s: float, **command: object) -> firefleet.Scenario:
+    scenario = firefleet.load_scenario(name)
+    replace: Any = dataclasses.replace
+    cmd = replace(scenario.command, **command)
+    return dataclasses.replace(scenario, duration_s=duration_s, command=cmd)
+
+
+def test_a_run_without_the_team_burns_the_baseline() -> None:
+    """``robots: false`` is the baseline world: the same seed burns the same cells."""
+    scenario = _short(OFFICE, 40.0, robots=False)
+    result = firefleet.simulate(scenario, record_every=100)
+    metrics = mission_metrics(result)
+    assert metrics["burned_area_m2"] == baseline_burned_area_m2(scenario) > 0.0
+    assert metrics["burned_vs_baseline"] == 1.0
+    assert metrics["fires_detected"] == 0.0
+    assert not np.any(np.abs(result.pose - result.pose[0]) > 1e-9)  # nobody moved
+
+
+def test_air_near_the_floor_damages_a_robot_in_the_fire() -> None:
+    scenario = _short(OFFICE, 10.0)
+    world = mission_world(scenario)
+    state = world.init(2)
+    fire_cell = tuple(int(v) for v in world.fire_cells[0])
+    xy = world.field.center_of(np.array(fire_cell))
+    state = world.act(
+        state,
+        {"spray": np.zeros(2, bool), "refill": np.zeros(2, bool)},
+        np.array([[xy[0], xy[1], 0.0], [1.0, 1.5, 0.0]]),
+    )
+    state = world.step(state, 0.0)  # the fire starts at 0 s: the cell burns at 800 C
+    assert state.fire.state[fire_cell] == BURNING
+    air = lower_layer(state.temperature_c[fire_cell], 20.0)
+    assert air == pytest.approx(20.0 + LOWER_LAYER * 780.0)
+    assert air > scenario.command.rating_c  # type: ignore[union-attr]
+    state = world.step(state, world.world_step_s)
+    assert state.damaged.tolist() == [True, False]
+    assert state.voltage_scale is not None
+    assert state.voltage_scale.tolist() == [0.0, 1.0]
+
+
+def test_detections_are_the_detectors_and_lie_where_the_heat_is() -> None:
+    """60 s of mission-office: each fire detection, placed on the map by the robot's
+    odometry, lies within 3 m of a cell hotter than 100 C at that time (the detector
+    reads rendered frames: hot gas at a door is a fire to it, as to a person reading
+    the frame); no person is reported where there is none."""
+    scenario = _short(OFFICE, 60.0)
+    result = firefleet.simulate(scenario, record_every=100)
+    world = mission_world(scenario)
+    det: Any = result.extra["detections"]
+    fires = det[det["kind"] == "fire"]
+    assert len(fires) > 0
+    times = result.extra["field_t_s"]
+    temps = result.extra["temperature_c"]
+    for row in fires:
+        j = int(np.argmin(np.abs(times - row["t_s"])))
+        hot = world.field.center_of(np.argwhere(temps[j] > 100.0))
+        d = np.hypot(hot[:, 0] - row["x_m"], hot[:, 1] - row["y_m"])
+        assert d.min() <= 3.0, row
+    people = det[det["kind"] == "person"]
+    for row in people:
+        d = np.hypot(*(world.victim_xy_m - [row["x_m"], row["y_m"]]).T)
+        assert d.min() <= 2.5, row
+    assert (result.extra["fire_state"][-1] != UNBURNT).any()
