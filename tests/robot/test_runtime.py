@@ -43,13 +43,15 @@ def test_an_overrun_streak_stops_and_estops_the_robot() -> None:
     )  # fmt: skip
     scenario = load_role(config, Path("."))
     with open_adapters(config, fake=True) as adapters:
-        poll = adapters.motors.poll
+        motors = adapters.motors
+        assert motors is not None  # a fake board, not the simulator
+        poll = motors.poll
 
         def slow_poll() -> list[Message]:  # a link that takes 15 ms: every period overruns
             time.sleep(0.015)
             return poll()
 
-        adapters.motors.poll = slow_poll  # type: ignore[method-assign]
+        motors.poll = slow_poll  # type: ignore[method-assign]
         result = run_onboard(config, scenario, adapters, stop=threading.Event())
         time.sleep(0.1)
         board = adapters.board
