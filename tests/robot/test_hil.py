@@ -65,6 +65,16 @@ SCALE = 0.4
 """Experiment 1 scaled down for the suite (see :func:`_small_experiment_1`)."""
 
 
+def _robot_configs(folder: Path, scenario: Path, listen: tuple[str, ...]) -> None:
+    """``robot-{i}.yaml`` for the three robots of ``scenario`` (in ``folder``)."""
+    for i in range(3):
+        link: dict[str, Any] = {"timeout_s": TIMEOUT_S}
+        if listen:  # a fixed endpoint of its own (that a test can connect to)
+            link["listen"] = listen[i]
+        config = {"scenario": scenario.name, "robot": i, "link": link}
+        (folder / f"robot-{i}.yaml").write_text(yaml.safe_dump(config))
+
+
 def _small_experiment_1(folder: Path, listen: tuple[str, ...] = ()) -> Path:
     """coop-different-paths scaled by :data:`SCALE`: paths, start points and times (the
     same speeds; 28 s instead of 70 s, so that the real-time run takes half a minute),
@@ -90,12 +100,7 @@ def _small_experiment_1(folder: Path, listen: tuple[str, ...] = ()) -> Path:
             claim["value"] = 0.2
     out = folder / "coop-small.yaml"
     out.write_text(yaml.safe_dump(data))
-    for i in range(3):
-        link: dict[str, Any] = {"timeout_s": TIMEOUT_S}
-        if listen:  # a fixed endpoint of its own (that a test can connect to)
-            link["listen"] = listen[i]
-        config = {"scenario": out.name, "robot": i, "link": link}
-        (folder / f"robot-{i}.yaml").write_text(yaml.safe_dump(config))
+    _robot_configs(folder, out, listen)
     return out
 
 
@@ -120,12 +125,7 @@ def _short_experiment_1(folder: Path, duration_s: float, listen: tuple[str, ...]
     data["claims"][0]["value"] = 0.2
     out = folder / "coop-short.yaml"
     out.write_text(yaml.safe_dump(data))
-    for i in range(3):
-        link: dict[str, Any] = {"timeout_s": TIMEOUT_S}
-        if listen:  # a fixed endpoint of its own (that a test can connect to)
-            link["listen"] = listen[i]
-        config = {"scenario": out.name, "robot": i, "link": link}
-        (folder / f"robot-{i}.yaml").write_text(yaml.safe_dump(config))
+    _robot_configs(folder, out, listen)
     return out
 
 

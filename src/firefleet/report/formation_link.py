@@ -78,16 +78,25 @@ def study_scenario() -> Scenario:
     return dataclasses.replace(base, duration_s=20.0, poses=poses, command=command)
 
 
-def points() -> list[tuple[str, float, LinkSpec]]:
-    """(axis, value, link) of every point: loss, burst and delay, one at a time."""
-    out = [("loss", v, LinkSpec(preset="xbee", loss=v)) for v in LOSSES]
+def impairment_points(
+    losses: Sequence[float], bursts: Sequence[float], delays_s: Sequence[float]
+) -> list[tuple[str, float, LinkSpec]]:
+    """(axis, value, link) of a study's points over XBee: each loss, each mean burst
+    length (> 1) at 25 % loss, each delay (> 0) with 20 ms of jitter, one at a time (the
+    path-following study of :mod:`firefleet.report.network` sweeps the same axes)."""
+    out = [("loss", v, LinkSpec(preset="xbee", loss=v)) for v in losses]
     out += [
-        ("burst", b, LinkSpec(preset="xbee", loss=0.25, burst_length=b)) for b in BURSTS if b > 1
+        ("burst", b, LinkSpec(preset="xbee", loss=0.25, burst_length=b)) for b in bursts if b > 1
     ]
     out += [
-        ("delay", d, LinkSpec(preset="xbee", delay_s=d, jitter_s=0.02)) for d in DELAYS_S if d > 0
+        ("delay", d, LinkSpec(preset="xbee", delay_s=d, jitter_s=0.02)) for d in delays_s if d > 0
     ]
     return out
+
+
+def points() -> list[tuple[str, float, LinkSpec]]:
+    """(axis, value, link) of every point of this study (:func:`impairment_points`)."""
+    return impairment_points(LOSSES, BURSTS, DELAYS_S)
 
 
 def formation_link_study(

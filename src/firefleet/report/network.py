@@ -46,14 +46,7 @@ SPREAD_BOUND_S = 0.5
 
 def _points() -> list[tuple[str, float, LinkSpec]]:
     """(axis, value, link) of every point: loss, burst and delay, one at a time."""
-    out = [("loss", v, LinkSpec(preset="xbee", loss=v)) for v in LOSSES]
-    out += [
-        ("burst", b, LinkSpec(preset="xbee", loss=0.25, burst_length=b)) for b in BURSTS if b > 1
-    ]
-    out += [
-        ("delay", d, LinkSpec(preset="xbee", delay_s=d, jitter_s=0.02)) for d in DELAYS_S if d > 0
-    ]
-    return out
+    return formation_link.impairment_points(LOSSES, BURSTS, DELAYS_S)
 
 
 def link_study(
