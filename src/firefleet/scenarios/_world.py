@@ -43,7 +43,8 @@ class WorldSpec:
     """The building: ``map`` is a built-in map's name (``office``, ``warehouse``,
     ``maze``) or the path of a ``map_server`` YAML file; for a mission, its ``fires``,
     ``victims`` and ``fuel`` (:mod:`firefleet.scenarios._mission`) and the cell of the
-    fire, heat and smoke grids, ``field_cell_m`` (a whole number of the map's cells), and
+    fire, heat and smoke grids, ``field_cell_m`` (a whole number of the map's cells;
+    default: the fewest map cells that make at least 0.25 m), and
     the fire's spread rate ``spread_m_s`` (its front speed along a one-cell strip of fuel;
     over an open floor, with more burning neighbours, the front runs about 3.7 times
     faster, measured: 4 mm/s gives some 1.5 cm/s, a metre a minute, the lateral flame
@@ -60,15 +61,17 @@ class WorldSpec:
     fires: tuple[FireSpec, ...] = ()
     victims: tuple[VictimSpec, ...] = ()
     fuel: FuelSpec = pydantic.Field(default_factory=FuelSpec)
-    field_cell_m: float = 0.25
+    field_cell_m: float | None = None
     spread_m_s: float = 0.004
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.spread_m_s) and self.spread_m_s > 0.0):
             raise InputError(f"world.spread_m_s must be > 0, got {self.spread_m_s}")
         grid = self.grid()  # an unknown name or a bad file is an error here, naming world.map
-        factor = self.field_cell_m / grid.resolution_m
-        if not (factor >= 1.0 - 1e-9 and abs(factor - round(factor)) < 1e-6):
+        factor = self.field_factor(grid)
+        if self.field_cell_m is not None and not (
+            factor >= 1 and abs(self.field_cell_m / grid.resolution_m - factor) < 1e-6
+        ):
             raise InputError(
                 f"world.field_cell_m: {self.field_cell_m:g} must be a whole number (>= 1) "
                 f"of the map's {grid.resolution_m:g} m cells"
@@ -96,6 +99,13 @@ class WorldSpec:
                     f"world.fuel.regions[{i}]: x_m {list(region.x_m)}, y_m {list(region.y_m)} "
                     f"lies outside map {self.map!r} (x {x0:g}..{x1:g} m, y {y0:g}..{y1:g} m)"
                 )
+
+    def field_factor(self, grid: OccupancyGrid) -> int:
+        """Map cells per side of a field cell: ``field_cell_m`` over the map's resolution,
+        or, without the key, the fewest that make a field cell of at least 0.25 m."""
+        if self.field_cell_m is None:
+            return max(1, math.ceil(0.25 / grid.resolution_m - 1e-9))
+        return max(0, round(self.field_cell_m / grid.resolution_m))
 
     def grid(self) -> OccupancyGrid:
         """The map's occupancy grid (:func:`firefleet.world.load_map`)."""

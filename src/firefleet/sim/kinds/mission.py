@@ -105,7 +105,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     spec = scenario.world
     assert spec is not None  # _grid
     grid = _grid(scenario)
-    field = coarsen(grid, round(spec.field_cell_m / grid.resolution_m))
+    field = coarsen(grid, spec.field_factor(grid))
     fuel = np.full(field.shape, spec.fuel.default)
     if spec.fuel.regions:
         h, w = field.shape
