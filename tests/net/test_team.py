@@ -13,13 +13,11 @@ import os
 import signal
 import struct
 import time
-from collections.abc import Iterator
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import psutil  # type: ignore[import-untyped]  # no type information shipped
 import pytest
 import zenoh
 
@@ -31,27 +29,7 @@ from firefleet.net.transport import Keys, open_session
 from firefleet.scenarios.schema import PathFollowing, Scenario
 from firefleet.sim.registry import task_kind
 from firefleet.sim.result import SimResult
-
-
-@pytest.fixture(autouse=True)
-def no_stray_processes() -> Iterator[None]:
-    """Fail (and clean up) if a test leaves a child process running."""
-    me = psutil.Process()
-    before = {p.pid for p in me.children(recursive=True)}
-    stray: list[psutil.Process] = []
-    try:
-        yield
-    finally:
-        deadline = time.monotonic() + 5.0
-        while time.monotonic() < deadline:
-            stray = [p for p in me.children(recursive=True) if p.pid not in before]
-            if not stray:
-                break
-            time.sleep(0.05)
-        for proc in stray:
-            proc.kill()
-        psutil.wait_procs(stray, timeout=5.0)
-    assert not stray, f"processes left running: {[p.pid for p in stray]}"
+from tests._processes import no_stray_processes  # noqa: F401  (autouse: importing is using)
 
 
 def _short(duration_s: float = 2.0) -> Scenario:

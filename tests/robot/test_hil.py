@@ -23,7 +23,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import psutil  # type: ignore[import-untyped]  # no type information shipped
 import pytest
 import yaml
 
@@ -35,30 +34,10 @@ from firefleet.robot import load_role, read_robot_config
 from firefleet.robot._teamlink import Watchdog
 from firefleet.sim.metrics import compute_metrics
 from firefleet.sim.registry import task_kind
+from tests._processes import no_stray_processes  # noqa: F401  (autouse: importing is using)
 
 RUN_ID = 1  # the robot configs' default link.run_id, the plant's default with --external
 TIMEOUT_S = 1.0  # link.timeout_s of the robots below
-
-
-@pytest.fixture(autouse=True)
-def no_stray_processes() -> Iterator[None]:
-    """Fail (and clean up) if a test leaves a child process running."""
-    me = psutil.Process()
-    before = {p.pid for p in me.children(recursive=True)}
-    stray: list[psutil.Process] = []
-    try:
-        yield
-    finally:
-        deadline = time.monotonic() + 5.0
-        while time.monotonic() < deadline:
-            stray = [p for p in me.children(recursive=True) if p.pid not in before]
-            if not stray:
-                break
-            time.sleep(0.05)
-        for proc in stray:
-            proc.kill()
-        psutil.wait_procs(stray, timeout=5.0)
-    assert not stray, f"processes left running: {[p.pid for p in stray]}"
 
 
 SCALE = 0.4

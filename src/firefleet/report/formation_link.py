@@ -33,9 +33,11 @@ __all__ = [
     "BURSTS",
     "DELAYS_S",
     "LOSSES",
+    "axis_points",
     "breakdown_delay_s",
     "formation_link_study",
     "formation_study_png",
+    "impairment_points",
     "points",
     "study_scenario",
 ]
@@ -149,9 +151,9 @@ def _holds(point: dict[str, Any]) -> bool:
     return all(point[key] <= bound for key, bound in BOUNDS.items())
 
 
-def _axis_points(study: dict[str, Any], axis: str) -> list[dict[str, Any]]:
+def axis_points(study: dict[str, Any], axis: str) -> list[dict[str, Any]]:
     """The points of an axis, with the shared ones (loss 0 for delay 0, loss 25 % for
-    burst 1)."""
+    burst 1): of this study, or of the path-following one (the same axes)."""
     pts = study["points"]
     if axis == "delay":
         zero = [
@@ -182,7 +184,7 @@ def breakdown_delay_s(study: dict[str, Any]) -> float:
     >>> breakdown_delay_s({"points": pts})
     0.3
     """
-    pts = _axis_points(study, "delay")
+    pts = axis_points(study, "delay")
     for d in sorted({p["value"] for p in pts}):
         if not all(_holds(p) for p in pts if p["value"] == d):
             return float(d)
@@ -208,7 +210,7 @@ def formation_study_png(study: dict[str, Any]) -> bytes:
     )
     fig, axes = plt.subplots(2, 3, figsize=(12, 6.5), sharey="row")
     for col, (axis, label, scale) in enumerate(axes_spec):
-        pts = _axis_points(study, axis)
+        pts = axis_points(study, axis)
         values = sorted({p["value"] for p in pts})
         for row, (key, ylabel) in enumerate(rows):
             ax = axes[row, col]

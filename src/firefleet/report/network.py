@@ -111,23 +111,6 @@ def _on_delay_axis(point: dict[str, Any], d: float) -> bool:
     return bool(point["axis"] == "delay" and point["value"] == d)
 
 
-def _axis_points(study: dict[str, Any], axis: str) -> list[dict[str, Any]]:
-    """The points of an axis, with the shared ones (loss 0 for delay 0, loss 25 % for
-    burst 1)."""
-    pts = study["points"]
-    if axis == "delay":
-        zero = [dict(p, axis="delay", value=0.0) for p in pts if _on_delay_axis(p, 0.0)]
-        return zero + [p for p in pts if p["axis"] == "delay"]
-    if axis == "burst":
-        one = [
-            dict(p, axis="burst", value=1.0)
-            for p in pts
-            if p["axis"] == "loss" and p["value"] == 0.25
-        ]
-        return one + [p for p in pts if p["axis"] == "burst"]
-    return [p for p in pts if p["axis"] == axis]
-
-
 def study_png(study: dict[str, Any]) -> bytes:
     """The study's figure: spread and cross-track error against each impairment."""
     import matplotlib
@@ -142,7 +125,7 @@ def study_png(study: dict[str, Any]) -> bytes:
     )
     fig, axes = plt.subplots(2, 3, figsize=(12, 6.5), sharey="row")
     for col, (axis, label, scale) in enumerate(axes_spec):
-        pts = _axis_points(study, axis)
+        pts = formation_link.axis_points(study, axis)
         values = sorted({p["value"] for p in pts})
         for row, (key, ylabel) in enumerate(
             (
