@@ -287,6 +287,19 @@ def test_the_watchdog_trips_after_the_timeout_and_releases_after_rearm() -> None
     assert dog.trips[-1]["silent"] == [1]
 
 
+def test_a_teammate_falling_silent_during_a_trip_joins_it() -> None:
+    dog = Watchdog(teammates=(1, 2), timeout_s=1.0, rearm_s=0.5, start_s=0.0)
+    dog.heard(1, 5.0)
+    dog.heard(2, 5.0005)  # the two stop half a millisecond apart
+    assert not dog.check(5.9999)
+    assert dog.check(6.0002)  # robot 2 past the timeout, robot 3 not yet (0.9997 s)
+    assert dog.trips[0]["silent"] == [2]
+    assert dog.check(6.0102)  # the next period: robot 3 too, in the same trip
+    assert len(dog.trips) == 1
+    assert dog.trips[0]["silent"] == [2, 3]
+    assert dog.trips[0]["silent_s"] == pytest.approx([1.0002, 1.0097])
+
+
 def test_hil_usage_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     scenario = _short_experiment_1(tmp_path, duration_s=2.0)
     endpoint = f"tcp/127.0.0.1:{free_port()}"

@@ -15,7 +15,8 @@ never, ``timeout_s`` after this robot's first period) trips the e-stop: the loop
 commands zero wheel speeds from that period on. It is *latched*: it holds until every
 teammate is heard again (each within ``timeout_s``) and has stayed so for ``rearm_s``;
 then the robot drives again (the coordination lets the others catch up). Each trip is
-recorded with the monotonic time it happened and who was silent.
+recorded with the monotonic time it happened and who was silent (a teammate falling
+silent while it holds joins it).
 
 Examples
 --------
@@ -100,6 +101,12 @@ class Watchdog:
                 self.trips.append(
                     {"t_monotonic_s": now_s, "silent": [j + 1 for j in lost], "silent_s": quiet}
                 )
+            else:  # a teammate falling silent during the trip joins it (one event)
+                trip = self.trips[-1]
+                for j in lost:
+                    if j + 1 not in trip["silent"]:
+                        trip["silent"].append(j + 1)
+                        trip["silent_s"].append(now_s - self.last.get(j, self.start_s))
         elif self.latched:
             if self.back_since is None:
                 self.back_since = now_s
