@@ -77,6 +77,11 @@ def test_the_issue_yaml_validates_as_printed(tmp_path: Path) -> None:
             "sensors.thermal",
         ),
         (
+            "sensors: {thermal: {}, ultrasonic: {count: 8}}",
+            "sensors: {thermal: {}, ultrasonic: {count: 8}, pt100: {time_constant_s: 0}}",
+            "sensors.pt100.time_constant_s: expected > 0, got 0.0",
+        ),
+        (
             "poses: [[1.0, 1.0, 0.0], [1.0, 2.0, 0.0], [1.0, 3.0, 0.0]]",
             "poses: []",
             "poses must list at least one robot",
@@ -98,6 +103,7 @@ def test_bad_mission_input_is_one_line_exit_2(
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1, done.stderr
     assert says in lines[0]
+    assert lines[0].count(says.split(":")[0]) == 1, "the key is named once"
 
 
 OFFICE = Path(__file__).resolve().parents[2] / "examples" / "missions" / "mission-office.yaml"

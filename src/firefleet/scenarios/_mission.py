@@ -23,6 +23,7 @@ from typing import Literal
 import pydantic
 
 from firefleet.errors import InputError, check_fields
+from firefleet.models.pt100 import Pt100Params
 from firefleet.scenarios._claims import _STRICT
 
 __all__ = ["FireSpec", "FuelRegion", "FuelSpec", "Mission", "ThermalSpec", "VictimSpec"]
@@ -106,6 +107,35 @@ class ThermalSpec:
     def __post_init__(self) -> None:
         check_fields(self, "sensors.thermal", positive=("rate_hz", "supersample"))
         check_fields(self, "sensors.thermal", non_negative=("netd_k",))
+
+
+@pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
+class Pt100Spec:
+    """The PT100 air-temperature probe on every robot (deliverable section 2.7.2.7),
+    read by a MAX31865 (:mod:`firefleet.models.pt100`).
+
+    Attributes
+    ----------
+    time_constant_s : float
+        The sheath's first-order time constant in air [s].
+    ref_ohm : float
+        The converter's reference resistor [ohm].
+    adc_bits : int
+        The converter's resolution (0: an ideal reading).
+    """
+
+    time_constant_s: float = 10.0
+    ref_ohm: float = 430.0
+    adc_bits: int = 15
+
+    def __post_init__(self) -> None:
+        self.params()  # checks the values, naming sensors.pt100's keys
+
+    def params(self) -> Pt100Params:
+        """The probe's model parameters."""
+        return Pt100Params(
+            time_constant_s=self.time_constant_s, ref_ohm=self.ref_ohm, adc_bits=self.adc_bits
+        )
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)

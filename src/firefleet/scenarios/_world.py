@@ -26,7 +26,14 @@ import pydantic
 
 from firefleet.errors import InputError, check_fields
 from firefleet.scenarios._claims import _STRICT
-from firefleet.scenarios._mission import FireSpec, FuelSpec, Mission, ThermalSpec, VictimSpec
+from firefleet.scenarios._mission import (
+    FireSpec,
+    FuelSpec,
+    Mission,
+    Pt100Spec,
+    ThermalSpec,
+    VictimSpec,
+)
 from firefleet.world import BUILTIN_MAPS, OccupancyGrid, load_map
 
 __all__ = ["LidarSpec", "Navigate", "SensorsSpec", "UltrasonicSpec", "WorldSpec", "check_world"]
@@ -158,11 +165,13 @@ class LidarSpec:
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class SensorsSpec:
     """The sensors every robot carries (each optional): range sensors and, for a
-    mission, the thermal camera."""
+    mission, the thermal camera and the PT100 (without ``pt100`` a mission's robots
+    carry the default probe)."""
 
     ultrasonic: UltrasonicSpec | None = None
     lidar: LidarSpec | None = None
     thermal: ThermalSpec | None = None
+    pt100: Pt100Spec | None = None
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)

@@ -314,7 +314,7 @@ def _describe(error: Any) -> str:
         return f"{where}: required, missing"
     if kind == "value_error":
         message = str(error["msg"]).removeprefix("Value error, ")
-        return message if loc == () else f"{where}: {message}"
+        return message if loc == () or message.startswith(where) else f"{where}: {message}"
     value = json.dumps(error.get("input"), default=str)
     if len(value) > 60:
         value = value[:57] + "..."
