@@ -19,7 +19,7 @@ from firefleet.perception.thermal._detect_kernel import (
 )
 from firefleet.perception.thermal._frames import destripe
 from firefleet.perception.thermal._radiometry import _radiance_table
-from firefleet.perception.thermal._table import interp_sorted, interp_table
+from firefleet.perception.thermal._table import interp_sorted, interp_sorted_from, interp_table
 
 from ._detect_reference import detect_reference
 
@@ -175,6 +175,12 @@ def test_table_interpolation_is_numpys() -> None:
     )
     got = np.array([interp_table(v, table_c, table_rad) for v in x])
     np.testing.assert_array_equal(got, np.interp(x, table_c, table_rad))
+    step = 1.0 / 0.25
+    guessed = [interp_sorted_from(v, table_c, table_rad, int((v + 100.0) * step), 0) for v in x]
+    np.testing.assert_array_equal(guessed, got)
     rad = np.concatenate([np.interp(x, table_c, table_rad), table_rad[::101], [0.0, 1e9]])
     back = np.array([interp_sorted(v, table_rad, table_c) for v in rad])
     np.testing.assert_array_equal(back, np.interp(rad, table_rad, table_c))
+    for lo, hi in ((0, 1), (4000, 4001), (10, 5000), (table_c.size - 2, table_c.size - 1)):
+        from_guess = np.array([interp_sorted_from(v, table_rad, table_c, lo, hi) for v in rad])
+        np.testing.assert_array_equal(from_guess, back)

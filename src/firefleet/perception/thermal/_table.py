@@ -9,7 +9,7 @@ import numba
 
 from firefleet._typing import FloatArray
 
-__all__ = ["interp_sorted", "interp_table"]
+__all__ = ["interp_sorted", "interp_sorted_from", "interp_table"]
 
 
 @numba.njit(cache=True)
@@ -58,6 +58,44 @@ def interp_sorted(x: float, xp: FloatArray, fp: FloatArray) -> float:  # pragma:
         return float(fp[0])
     lo, hi = 0, n - 1  # xp[lo] <= x < xp[hi]
     while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    if xp[lo] == x:
+        return float(fp[lo])
+    slope = (fp[lo + 1] - fp[lo]) / (xp[lo + 1] - xp[lo])
+    return float(slope * (x - xp[lo]) + fp[lo])
+
+
+@numba.njit(cache=True)
+def interp_sorted_from(
+    x: float, xp: FloatArray, fp: FloatArray, lo: int, hi: int
+) -> float:  # pragma: no cover - compiled
+    """:func:`interp_sorted` with the search started in ``xp[lo:hi + 1]`` (cheap when the
+    answer lies there; the same result wherever it lies).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal._table import interp_sorted_from
+    >>> xp = np.array([0.0, 1.0, 4.0, 9.0])
+    >>> [float(interp_sorted_from(2.5, xp, np.sqrt(xp), g, g + 1)) for g in (0, 1, 2)]
+    [1.5, 1.5, 1.5]
+    """
+    n = xp.size
+    if x >= xp[n - 1]:
+        return float(fp[n - 1])
+    if x < xp[0]:
+        return float(fp[0])
+    lo = min(max(lo, 0), n - 2)
+    hi = min(max(hi, lo + 1), n - 1)
+    if xp[lo] > x:
+        lo = 0
+    if xp[hi] <= x:
+        hi = n - 1
+    while hi - lo > 1:  # xp[lo] <= x < xp[hi]
         mid = (lo + hi) // 2
         if xp[mid] <= x:
             lo = mid
