@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numba
 import numpy as np
 
 from firefleet._typing import FloatArray
@@ -82,13 +83,23 @@ def _near_walls(
     return out[:, :used], radius
 
 
+@numba.njit(cache=True)
 def _conflict(
     mine: FloatArray, theirs: FloatArray, me: FloatArray, gap_m: float
-) -> tuple[bool, bool]:
-    """(my path ahead meets theirs, I stand in their way)."""
-    d = np.hypot(mine[:, None, 0] - theirs[None, :, 0], mine[:, None, 1] - theirs[None, :, 1])
-    in_way = bool(np.min(np.hypot(theirs[:, 0] - me[0], theirs[:, 1] - me[1])) < gap_m)
-    return bool(d.min() < gap_m), in_way
+) -> tuple[bool, bool]:  # pragma: no cover - compiled
+    """(my path ahead meets theirs, I stand in their way): whether any of my points
+    (K, 2) lies within ``gap_m`` of any of theirs (L, 2), and whether any of theirs lies
+    within ``gap_m`` of me."""
+    in_way = False
+    for j in range(theirs.shape[0]):
+        if np.hypot(theirs[j, 0] - me[0], theirs[j, 1] - me[1]) < gap_m:
+            in_way = True
+            break
+    for i in range(mine.shape[0]):
+        for j in range(theirs.shape[0]):
+            if np.hypot(mine[i, 0] - theirs[j, 0], mine[i, 1] - theirs[j, 1]) < gap_m:
+                return True, in_way
+    return False, in_way
 
 
 def _aside_spot(
@@ -279,7 +290,9 @@ def navigation_step(
             if math.hypot(*(pose[i, :2] - pose[j, :2])) > 2.0 * params.yield_distance_m + gap:
                 continue
             theirs = np.vstack([pose[j : j + 1, :2], samples[j][index[j] : index[j] + ahead, :2]])
-            meets, in_way = _conflict(mine, theirs, pose[i, :2], gap)
+            meets, in_way = _conflict(
+                np.ascontiguousarray(mine), theirs, np.ascontiguousarray(pose[i, :2]), gap
+            )
             if meets and in_way and aside[i] < 0:
                 rest = np.vstack([pose[j : j + 1, :2], samples[j][index[j] :: 2, :2]])
                 spot = _aside_spot(state, params, pose, mates, i, j, rest, gap)
