@@ -72,3 +72,15 @@ def test_give_way_conflict_equals_numpy() -> None:
         d = np.hypot(mine[:, None, 0] - theirs[None, :, 0], mine[:, None, 1] - theirs[None, :, 1])
         want = (bool(d.min() < gap), bool(np.hypot(*(theirs - me).T).min() < gap))
         assert _conflict(mine, theirs, me, gap) == want
+
+
+def test_aside_clearance_filter_equals_numpy() -> None:
+    from firefleet.control.navigation._step import _clear_of
+
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        xy = rng.uniform(0.0, 6.0, (int(rng.integers(1, 400)), 2))
+        pts = rng.uniform(0.0, 6.0, (int(rng.integers(1, 150)), 2))
+        limit = float(rng.uniform(0.2, 1.5))
+        d = np.hypot(xy[:, None, 0] - pts[None, :, 0], xy[:, None, 1] - pts[None, :, 1])
+        np.testing.assert_array_equal(_clear_of(xy, pts, limit), d.min(axis=1) > limit)

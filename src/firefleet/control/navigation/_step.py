@@ -102,6 +102,21 @@ def _conflict(
     return False, in_way
 
 
+@numba.njit(cache=True)
+def _clear_of(
+    xy: FloatArray, pts: FloatArray, limit: float
+) -> np.ndarray:  # pragma: no cover - compiled
+    """Whether each point of ``xy`` (C, 2) lies farther than ``limit`` from every point
+    of ``pts`` (P, 2) (all True for no points)."""
+    keep = np.ones(xy.shape[0], dtype=np.bool_)
+    for c in range(xy.shape[0]):
+        for j in range(pts.shape[0]):
+            if not np.hypot(xy[c, 0] - pts[j, 0], xy[c, 1] - pts[j, 1]) > limit:
+                keep[c] = False
+                break
+    return keep
+
+
 def _aside_spot(
     state: NavigationState,
     params: NavigationParams,
@@ -126,11 +141,10 @@ def _aside_spot(
     if len(cells) == 0:
         return None
     xy = grid.center_of(cells)
-    keep = np.ones(len(xy), dtype=bool)
-    for pts in (rest, np.delete(mates, i, axis=0)):
-        for chunk in np.array_split(pts, max(len(pts) // 64, 1)):
-            d = np.hypot(xy[:, None, 0] - chunk[None, :, 0], xy[:, None, 1] - chunk[None, :, 1])
-            keep &= d.min(axis=1) > gap + params.goal_tolerance_m + 0.1
+    limit = gap + params.goal_tolerance_m + 0.1
+    keep = _clear_of(xy, np.ascontiguousarray(rest, dtype=float), limit) & _clear_of(
+        xy, np.ascontiguousarray(np.delete(mates, i, axis=0), dtype=float), limit
+    )
     xy = xy[keep]
     if len(xy) == 0:
         return None
