@@ -101,7 +101,9 @@ def floor100_rooms(seed: int = _SEED) -> FloatArray:
                     width = float(rng.choice([4.0, 5.0, 6.0, 7.0, 8.0]))
                     end = sx1 if sx1 - (x + width) < 4.0 else x + width
                     slack = end - x - _DOOR_M - 1.0
-                    door_x = x + 0.5 + _DOOR_M / 2 + 0.25 * int(rng.integers(0, int(slack / 0.25) + 1))
+                    door_x = (
+                        x + 0.5 + _DOOR_M / 2 + 0.25 * int(rng.integers(0, int(slack / 0.25) + 1))
+                    )
                     out.append((x, end, y0, y1, door_x, door_y))
                     x = end + _WALL_M
     for b, r in _HALLS:
@@ -138,7 +140,9 @@ def floor100(seed: int = _SEED) -> BoolArray:
         wide = _HALL_DOOR_M if (x1 - x0 > 20.0 and y1 - y0 > 20.0) else _DOOR_M
         if (x0, x1, y0, y1) != _LOBBY:
             half = wide / 2
-            _fill(occupied, door_x - half, door_y - _WALL_M / 2, door_x + half, door_y + 0.125, False)
+            _fill(
+                occupied, door_x - half, door_y - _WALL_M / 2, door_x + half, door_y + 0.125, False
+            )
     lx0, lx1, _, ly1 = _LOBBY  # the lobby opens 10 m wide onto the first corridor
     _fill(occupied, lx0 + 1.0, ly1, lx1 - 1.0, ly1 + _WALL_M, False)
     for b, r in halls:  # the pillars

@@ -365,6 +365,39 @@ def _component_burning(fire_state: np.ndarray, cell: tuple[int, int]) -> bool:
     return bool(lab and np.any((labels == lab) & (fire_state == BURNING)))
 
 
+def _touches_wall(grid: OccupancyGrid, xy_m: FloatArray, radius_m: float) -> np.ndarray:
+    """Whether each robot's disc ever overlapped an occupied cell (or the map's edge),
+    shape (N,) from positions (T, N, 2) [m].
+
+    The exact clearance (``clearance_m``, a Python loop over points) is computed only
+    where a lower bound allows a touch: a point in a cell whose centre lies ``e`` cells
+    from the nearest occupied centre is at least ``(e - sqrt 2) * resolution`` from any
+    occupied square. A 50-robot run of 20 minutes at 100 Hz has 6 million points; the
+    bound leaves those near walls.
+    """
+    import scipy.ndimage as ndi
+
+    from firefleet.sim.kinds._navigate_metrics import clearance_m
+
+    h, w = grid.shape
+    edt = ndi.distance_transform_edt(~np.pad(grid.occupied, 1, constant_values=True))[1:-1, 1:-1]
+    rc = grid.cell_of(xy_m)
+    inside = grid.contains(xy_m)
+    bound = np.where(
+        inside,
+        (edt[np.clip(rc[..., 0], 0, h - 1), np.clip(rc[..., 1], 0, w - 1)] - math.sqrt(2.0))
+        * grid.resolution_m,
+        -1.0,
+    )
+    near = bound < radius_m + 1e-9
+    touch = np.zeros(xy_m.shape[1], dtype=bool)
+    if near.any():
+        t_idx, robot = np.nonzero(near)
+        clear = clearance_m(grid, xy_m[t_idx, robot])
+        np.logical_or.at(touch, robot, clear < radius_m)
+    return touch
+
+
 def mission_metrics(result: SimResult) -> Metrics:
     """Metrics of a mission run (issue 15, item 6; module notes).
 
@@ -380,8 +413,6 @@ def mission_metrics(result: SimResult) -> Metrics:
     camera covered); ``collisions`` (robots that touched a wall or another robot);
     ``robots_damaged``; ``water_used_l`` per robot.
     """
-    from firefleet.sim.kinds._navigate_metrics import clearance_m
-
     scenario = result.scenario
     cmd = _command(scenario)
     world = mission_world(scenario)
@@ -415,11 +446,12 @@ def mission_metrics(result: SimResult) -> Metrics:
     collided = 0
     if cmd.robots:
         xy = result.pose[:, :, :2]
-        clear = clearance_m(_grid(scenario), xy) - cmd.robot_radius_m
-        d = np.linalg.norm(xy[:, :, None, :] - xy[:, None, :, :], axis=-1)
+        touch = _touches_wall(_grid(scenario), xy, cmd.robot_radius_m)
         n = xy.shape[1]
-        d[:, np.arange(n), np.arange(n)] = np.inf
-        touch = (clear < 0.0).any(axis=0) | (d < 2 * cmd.robot_radius_m).any(axis=(0, 2))
+        for i in range(n):  # one robot at a time: (T, N), not (T, N, N) (50 robots)
+            d = np.hypot(xy[:, :, 0] - xy[:, i : i + 1, 0], xy[:, :, 1] - xy[:, i : i + 1, 1])
+            d[:, i] = np.inf
+            touch[i] |= bool((d < 2 * cmd.robot_radius_m).any())
         collided = int(touch.sum())
     burned = float(np.count_nonzero(final != UNBURNT) * area)
     baseline = baseline_burned_area_m2(scenario)
