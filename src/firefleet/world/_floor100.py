@@ -137,7 +137,7 @@ def floor100(seed: int = _SEED) -> BoolArray:
     rooms = floor100_rooms(seed)
     for x0, x1, y0, y1, door_x, door_y in rooms:
         _fill(occupied, x0, y0, x1, y1, False)
-        wide = _HALL_DOOR_M if (x1 - x0 > 20.0 and y1 - y0 > 20.0) else _DOOR_M
+        wide = _HALL_DOOR_M if y1 - y0 > 20.0 else _DOOR_M  # a hall spans two rows
         if (x0, x1, y0, y1) != _LOBBY:
             half = wide / 2
             _fill(

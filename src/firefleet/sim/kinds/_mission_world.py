@@ -325,7 +325,7 @@ class MissionWorld:
 
     def final(self, state: MissionWorldState) -> Messages:
         """The log: ``field_t_s`` (T'), ``fire_state`` (T', H, W) int8, ``temperature_c``
-        and ``smoke_per_m`` (T', H, W) float16, ``detections`` (structured), per victim
+        (T', H, W) float32 and ``smoke_per_m`` float16, ``detections`` (structured), per victim
         ``victims_found_s`` and ``victim_dose``, per robot ``damaged``, ``water_used_l``,
         and ``all_out_s``, ``explored_pct``, the fuel and the fires' cells."""
         log = state.log
