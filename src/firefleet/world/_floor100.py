@@ -6,8 +6,9 @@ at y = 12.5, 37.5, 62.5, 87.5 m) crossed by three north-south ones (a 3 m spine 
 10.75 m deep, each row facing its corridor, cut into 84 rooms 3.75-10.75 m wide
 (widths of 4-8 m drawn from a generator seeded with ``seed``, the last of a row taking
 the rest), each with a 1.0 m door on its corridor at a drawn offset; four halls of
-15-30 m x 22 m (two rows merged) with two 2 m double doors on each of their corridors and 0.5 m pillars on a 6 m grid; and the entrance lobby (12 m x
-10.75 m) at the south end of the spine, where the team starts. Walls are one cell
+15-30 m x 22 m (two rows merged) with two 2 m double doors on each of their corridors
+and 0.5 m pillars on a 6 m grid; and the entrance lobby (12 m x 10.75 m) at the south
+end of the spine, where the team starts. Walls are one cell
 (0.25 m) thick and lie on cell faces, so the range sensors' exact ray casting sees them
 where they are drawn.
 
