@@ -126,7 +126,7 @@ def floor100(seed: int = _SEED) -> BoolArray:
     >>> from firefleet.world._floor100 import floor100
     >>> plan = floor100()
     >>> plan.shape, round(float(plan.mean()), 2)  # rows (100 m), columns; wall share
-    ((400, 400), 0.08)
+    ((400, 400), 0.06)
     """
     n = _cells(_SIZE_M)
     occupied = np.ones((n, n), dtype=bool)
