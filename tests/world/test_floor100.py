@@ -21,9 +21,11 @@ def test_size_resolution_and_the_map_server_file() -> None:
     assert grid.resolution_m == 0.25
     assert grid.origin_m == (0.0, 0.0)
     assert (grid.width_m, grid.height_m) == (100.0, 100.0)
-    assert not (grid.occupied & grid.free).any() and (grid.occupied | grid.free).all()
+    assert not (grid.occupied & grid.free).any()
+    assert (grid.occupied | grid.free).all()
     # the outer wall is closed all round
-    assert grid.occupied[[0, -1], :].all() and grid.occupied[:, [0, -1]].all()
+    assert grid.occupied[[0, -1], :].all()
+    assert grid.occupied[:, [0, -1]].all()
     # the 84 rooms, 4 halls (2 doors a side: 16 rows) and the lobby
     rooms = floor100_rooms()
     assert rooms.shape == (84 + 16 + 1, 6)
@@ -73,7 +75,8 @@ def test_astar_from_the_lobby_across_the_floor(goal: tuple[float, float]) -> Non
     grid = load_map("floor100")
     costmap = build_costmap(grid, inflation_m=ROBOT_RADIUS_M + 0.05)
     plan = astar(costmap, (50.0, 3.0), goal)
-    assert plan.status == "ok" and plan.xy_m is not None
+    assert plan.status == "ok"
+    assert plan.xy_m is not None
     length = float(np.sum(np.hypot(*np.diff(plan.xy_m, axis=0).T)))
     # at least the Manhattan distance along the corridors' grid minus the diagonals
     # across rooms, at most 1.5 times it
