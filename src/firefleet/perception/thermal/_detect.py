@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -342,6 +343,18 @@ def _size_range(
     return mean, 1.0 / math.sqrt(sum(wts))
 
 
+@functools.lru_cache(maxsize=1)
+def _default_params() -> DetectionParams:
+    """The default thresholds (made once: a robot calls :func:`detect` nine times a second)."""
+    return DetectionParams()
+
+
+@functools.lru_cache(maxsize=8)
+def _default_camera(shape: tuple[int, ...]) -> CameraModel:
+    """The default camera of a frame size (made once per size)."""
+    return CameraModel.for_frame(shape)
+
+
 def detect(
     frame_c: ArrayLike,
     *,
@@ -386,9 +399,9 @@ def detect(
     >>> len(result.detections), fire.kind, result.fire_alarm, round(fire.bearing_rad, 4)
     (1, 'fire', True, 0.0)
     """
-    p = DetectionParams() if params is None else params
+    p = _default_params() if params is None else params
     raw = check_frame(frame_c)
-    cam = CameraModel.for_frame(raw.shape) if camera is None else camera
+    cam = _default_camera(raw.shape) if camera is None else camera
     if (cam.height_px, cam.width_px) != raw.shape:
         raise InputError(
             f"camera is {cam.height_px} x {cam.width_px} px but the frame is "
