@@ -2,7 +2,6 @@
 tests/perception/test_detect_kernel.py compares it with (the same arithmetic, with
 scipy.ndimage's grey opening, labelling and per-label reductions)."""
 
-# ruff: noqa
 # mypy: ignore-errors
 from __future__ import annotations
 
@@ -14,7 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
-from firefleet.perception.thermal import CameraModel, band_radiance, destripe, denoise
+from firefleet.perception.thermal import CameraModel, band_radiance, denoise, destripe
 from firefleet.perception.thermal._detect import (
     Detection,
     DetectionParams,
