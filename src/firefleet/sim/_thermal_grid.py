@@ -228,6 +228,7 @@ def _cast(
     fires = np.empty(cap, dtype=np.int64)
     n_people = people.shape[0]
     s_people = np.empty(n_people)
+    seen = np.empty(n_people, dtype=np.int64)
     for k in range(n_robots):
         x0, y0, th = poses[k, 0], poses[k, 1], poses[k, 2]
         ct, st = np.cos(th), np.sin(th)
@@ -243,6 +244,11 @@ def _cast(
                     fires[n_fires] = i
                     n_fires += 1
             _people_along(x0, y0, ux, uy, people, person_w, s_people)
+            n_seen = 0  # the people whose billboard the column's plane meets, in order
+            for v in range(n_people):
+                if s_people[v] < np.inf:
+                    seen[n_seen] = v
+                    n_seen += 1
             lo = 0  # the floor or ceiling cell of the column's previous ray
             for r in range(n_rows):
                 slope = -yn[r] / length  # height gained per horizontal metre
@@ -284,8 +290,8 @@ def _cast(
                             best = s_hit
                             best_t = t_out[i]
                         break
-                for v in range(n_people):
-                    s = s_people[v]
+                for q in range(n_seen):
+                    s = s_people[seen[q]]
                     if s < best:
                         z = mount_h + slope * s
                         if 0.0 <= z <= person_h:
