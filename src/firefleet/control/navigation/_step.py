@@ -294,19 +294,26 @@ def navigation_step(
     # give way: lower index first
     gap = 2.0 * params.robot_radius_m + params.margin_m
     ahead = round(params.yield_distance_m / _SAMPLE_M)
+    # a teammate's position and path ahead, made once (robot j's own turn, which may
+    # re-plan it, comes before any i > j asks)
+    theirs_of: dict[int, FloatArray] = {}
     for i in map(int, np.nonzero(active)[0]):
         if aside[i] >= 0:
             continue  # already on its way out of a teammate's way: it does not stop
-        mine = samples[i][index[i] : index[i] + ahead, :2]
+        mine = np.ascontiguousarray(samples[i][index[i] : index[i] + ahead, :2])
+        me = np.ascontiguousarray(pose[i, :2])
         for j in range(i):
             if not active[j] or len(mine) == 0:
                 continue
             if math.hypot(*(pose[i, :2] - pose[j, :2])) > 2.0 * params.yield_distance_m + gap:
                 continue
-            theirs = np.vstack([pose[j : j + 1, :2], samples[j][index[j] : index[j] + ahead, :2]])
-            meets, in_way = _conflict(
-                np.ascontiguousarray(mine), theirs, np.ascontiguousarray(pose[i, :2]), gap
-            )
+            theirs = theirs_of.get(j)
+            if theirs is None:
+                theirs = np.vstack(
+                    [pose[j : j + 1, :2], samples[j][index[j] : index[j] + ahead, :2]]
+                )
+                theirs_of[j] = theirs
+            meets, in_way = _conflict(mine, theirs, me, gap)
             if meets and in_way and aside[i] < 0:
                 rest = np.vstack([pose[j : j + 1, :2], samples[j][index[j] :: 2, :2]])
                 spot = _aside_spot(state, params, pose, mates, i, j, rest, gap)
