@@ -10,6 +10,9 @@
    frontiers) with the navigation controller (A*, DWA) inside it, and the wheel stack
    (control: PID, motors, kinematics, encoders). Each is timed by wrapping the function
    the loop calls (wall clock, ``time.perf_counter``); the rest is the loop's own work.
+   Each scenario also gets a row of x real time on the process's CPU time
+   (``time.process_time``; informative, no floor): on a shared machine the wall clock
+   counts the other processes' work too.
 
 3. **mission-large** (50 robots on floor100, 100 m x 100 m, 10 fires; kept in examples/
    like mission-office): ``LARGE_S`` simulated seconds (the start: 50 first plans out
