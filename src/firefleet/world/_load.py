@@ -40,7 +40,7 @@ from firefleet.world._grid import OccupancyGrid
 
 __all__ = ["BUILTIN_MAPS", "load_map", "parse_map"]
 
-BUILTIN_MAPS = ("maze", "office", "warehouse")
+BUILTIN_MAPS = ("floor100", "maze", "office", "warehouse")
 """Names of the maps shipped in the package (``firefleet/world/maps/<name>.yaml``)."""
 
 _REQUIRED = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh")

@@ -1,9 +1,10 @@
 """The built-in floor plans, drawn cell by cell, and their ``map_server`` encoding.
 
-The three maps shipped in ``firefleet/world/maps/`` (``office``, ``warehouse``,
-``maze``) are the output of the functions here, written by ``tools/make_maps.py``; a
-test checks the shipped files equal what these functions draw, so the maps'
-provenance is this code. Every plan is at 0.05 m per cell with its origin at (0, 0).
+The maps shipped in ``firefleet/world/maps/`` (``office``, ``warehouse``, ``maze``, and
+``floor100`` from :mod:`firefleet.world._floor100`) are the output of the functions
+here, written by ``tools/make_maps.py``; a test checks the shipped files equal what
+these functions draw, so the maps' provenance is this code. Every plan is at 0.05 m per
+cell (``floor100``: 0.25 m) with its origin at (0, 0).
 
 References
 ----------
@@ -15,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from firefleet._typing import BoolArray
+from firefleet.world._floor100 import FLOOR100_RESOLUTION_M, floor100
 
 __all__ = ["PLANS", "RESOLUTION_M", "encode_pgm", "map_yaml", "maze", "office", "warehouse"]
 
@@ -155,7 +157,7 @@ def maze(seed: int = 7) -> BoolArray:
     return occupied
 
 
-PLANS = {"office": office, "warehouse": warehouse, "maze": maze}
+PLANS = {"office": office, "warehouse": warehouse, "maze": maze, "floor100": floor100}
 """The built-in plans by name."""
 
 _FREE_VALUE = 254
@@ -185,10 +187,13 @@ def map_yaml(image: str) -> str:
     >>> from firefleet.world._plans import map_yaml
     >>> print(map_yaml("office.pgm").splitlines()[0])
     image: office.pgm
+    >>> print(map_yaml("floor100.pgm").splitlines()[1])
+    resolution: 0.25
     """
+    resolution = FLOOR100_RESOLUTION_M if image == "floor100.pgm" else RESOLUTION_M
     return (
         f"image: {image}\n"
-        f"resolution: {RESOLUTION_M}\n"
+        f"resolution: {resolution}\n"
         "origin: [0.0, 0.0, 0.0]\n"
         "negate: 0\n"
         "occupied_thresh: 0.65\n"
