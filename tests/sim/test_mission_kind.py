@@ -4,6 +4,7 @@ physics at the robots, and detections that come from the detector."""
 from __future__ import annotations
 
 import dataclasses
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -147,6 +148,34 @@ def test_air_near_the_floor_damages_a_robot_in_the_fire() -> None:
     assert state.damaged.tolist() == [True, False]
     assert state.voltage_scale is not None
     assert state.voltage_scale.tolist() == [0.0, 1.0]
+
+
+def test_the_pt100_lags_the_air_by_its_time_constant() -> None:
+    """A robot parked in hot air: its PT100 follows the lower layer's air at its cell
+    through the sheath's first-order lag (the exact response to the air each world step
+    holds) and reads it through the converter."""
+    scenario = _short(OFFICE, 10.0)
+    world = mission_world(scenario)
+    tau, dt = world.pt100.time_constant_s, world.world_step_s
+    state = world.init(1)
+    state = world.act(
+        state,
+        {"spray": np.zeros(1, bool), "refill": np.zeros(1, bool)},
+        np.array([[1.0, 1.5, 0.0]]),
+    )
+    cell = tuple(int(v) for v in world.field.cell_of(np.array([1.0, 1.5])))
+    hot = np.full(world.field.shape, 220.0)
+    probe, t_s = 20.0, 0.0
+    for _ in range(100):  # 10 s, the air re-heated to 220 C before every world step
+        state = world.step(dataclasses.replace(state, temperature_c=hot), t_s)
+        air = float(lower_layer(state.temperature_c[cell], 20.0))
+        probe = air + (probe - air) * math.exp(-dt / tau)
+        t_s += dt
+    assert 20.0 + LOWER_LAYER * 199.0 < air < 20.0 + LOWER_LAYER * 200.0
+    assert state.probe_c[0] == pytest.approx(probe, rel=1e-12)
+    assert probe == pytest.approx(air + (20.0 - air) * math.exp(-10.0 / tau), abs=0.2)
+    # the reading: within one converter step (0.034 C) below the probe
+    assert 0.0 <= probe - state.pt100_c[0] < 0.04
 
 
 def test_detections_are_the_detectors_and_lie_where_the_heat_is() -> None:

@@ -18,8 +18,10 @@ bookkeeping of what happened, never read by the team.
 
 The sensors stage (:class:`MissionSensors`) gives every tick the range readings
 (firefleet.sim.ranging on the map; teammates are obstacles), the air temperature at
-each robot (its PT100, read without lag: the probe's seconds-long time constant is not
-modelled) and, every ``1 / rate_hz``, each robot's thermal frame rendered from the heat
+each robot (its PT100, :mod:`firefleet.models.pt100`: the probe's sheath lags the lower
+layer's air at the robot with its time constant, stepped with the world; the MAX31865
+converts at the world's step, 10 Hz, as the real one does in 52-62 ms) and, every
+``1 / rate_hz``, each robot's thermal frame rendered from the heat
 field, the flames and the people (firefleet.sim.sensors.render_thermal_grid_depth) and
 read by :func:`firefleet.perception.thermal.detect`, the detector that reads real FLIR
 frames, with a depth image registered to it (the deliverable's stereo rig; 3 % noise)
@@ -36,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from firefleet._typing import FloatArray
+from firefleet.models.pt100 import Pt100Params, pt100_read, pt100_step
 from firefleet.perception.thermal import detect
 from firefleet.sim._thermal_grid import GridThermalScene
 from firefleet.sim.drive import DriveState
@@ -152,6 +155,8 @@ class MissionWorldState(WorldState):
     next_s: float = 0.0
     started: Any = None
     log: Any = None
+    probe_c: Any = None
+    pt100_c: Any = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -186,6 +191,7 @@ class MissionWorld:
     spray_params: SprayParams = dataclasses.field(default_factory=SprayParams)
     victim_params: VictimParams = dataclasses.field(default_factory=VictimParams)
     found_radius_m: float = 2.0
+    pt100: Pt100Params = dataclasses.field(default_factory=Pt100Params)
 
     def init(self, n_robots: int) -> MissionWorldState:
         """The world before the first tick: nothing burning yet, ambient air."""
@@ -221,6 +227,8 @@ class MissionWorld:
             next_s=0.0,
             started=np.zeros(self.fire_start_s.size, dtype=bool),
             log=log,
+            probe_c=np.full(n_robots, HEAT.ambient),
+            pt100_c=pt100_read(np.full(n_robots, HEAT.ambient), self.pt100),
         )
 
     def _snapshot(self, state: MissionWorldState, t_s: float) -> None:
@@ -283,13 +291,16 @@ class MissionWorld:
             dt,
         )
         damaged = state.damaged
+        probe = state.probe_c
         if np.isfinite(state.pose[:, 0]).any():
             rc = self.field.cell_of(np.nan_to_num(state.pose[:, :2]))
             h, w = self.field.shape
             air = lower_layer(
                 temp[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)], HEAT.ambient
             )
-            damaged = damaged | (np.isfinite(state.pose[:, 0]) & (air > self.rating_c))
+            placed = np.isfinite(state.pose[:, 0])
+            damaged = damaged | (placed & (air > self.rating_c))
+            probe = pt100_step(probe, np.where(placed, air, probe), self.pt100, dt)
         if started.all() and not burning.any() and np.isnan(log["all_out_s"]):
             log["all_out_s"] = t_s
         new = dataclasses.replace(
@@ -304,6 +315,10 @@ class MissionWorld:
             tank_l=tank,
             voltage_scale=np.where(damaged, 0.0, 1.0) if damaged.any() else None,
             next_s=state.next_s + dt,
+            probe_c=probe,
+            pt100_c=(
+                pt100_read(probe, self.pt100) if probe is not state.probe_c else state.pt100_c
+            ),
             started=started,
         )
         self._snapshot(new, t_s)
@@ -393,18 +408,8 @@ class MissionSensors:
         out: dict[str, FloatArray] = {}
         if self.ranging is not None:
             out.update(self.ranging.read(world, drive))
-        field = self.world.field
-        h, w = field.shape
         pose = drive.pose
-        # field.cell_of's arithmetic, clipped to the grid, without its generality
-        col = np.floor((pose[:, 0] - field.origin_m[0]) / field.resolution_m).astype(np.int64)
-        row = (
-            h - 1 - np.floor((pose[:, 1] - field.origin_m[1]) / field.resolution_m).astype(np.int64)
-        )
-        air = world.temperature_c[
-            np.minimum(np.maximum(row, 0), h - 1), np.minimum(np.maximum(col, 0), w - 1)
-        ]
-        out["air_c"] = HEAT.ambient + LOWER_LAYER * (air - HEAT.ambient)  # lower_layer()
+        out["air_c"] = world.pt100_c  # the PT100's last conversion (module notes)
         out["tank_l"] = np.asarray(world.tank_l, dtype=float)
         out["damaged"] = world.damaged.astype(float)
         k = round(world.t_s / self.dt_s)
@@ -417,7 +422,7 @@ class MissionSensors:
 
         frames, depth = render_thermal_grid_depth(
             drive.pose,
-            field,
+            self.world.field,
             world.temperature_c,
             world.fire.state == BURNING,
             self.world.victim_xy_m,

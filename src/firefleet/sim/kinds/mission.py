@@ -121,7 +121,10 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     fuel[field.occupied] = 0.0
     fires = np.array([[f.x_m, f.y_m] for f in spec.fires], dtype=float).reshape(-1, 2)
     victims = np.array([[v.x_m, v.y_m] for v in spec.victims], dtype=float).reshape(-1, 2)
+    from firefleet.models.pt100 import Pt100Params
     from firefleet.world import FireParams, SprayParams
+
+    pt100 = scenario.sensors.pt100 if scenario.sensors is not None else None
 
     return MissionWorld(
         field=field,
@@ -140,6 +143,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
         seed=scenario.seed,
         spray_params=SprayParams(flow_l_s=cmd.flow_l_s, range_m=cmd.spray_range_m),
         fire_params=FireParams(spread_m_s=spec.spread_m_s),
+        pt100=pt100.params() if pt100 is not None else Pt100Params(),
     )
 
 
