@@ -134,6 +134,13 @@ class Mission:
         Step of the fire, heat, smoke and victims [s].
     record_s : float
         Recording period [s] (poses and the fields; about 1 Hz).
+    perception : {"thermal", "stereo"}
+        The team's eyes for people and fires: the thermal camera (``sensors.thermal``)
+        or, for a team without one, the stereo pair's visible-light camera, which the
+        smoke blinds (docs/mission.md, "Smoke and the stereo-only team").
+    stereo_team : bool
+        Also run a stereo-only team in the same world (map, fires, people, seed) and
+        report its ``stereo_victims_found`` and ``stereo_fires_detected``.
 
     Examples
     --------
@@ -152,6 +159,8 @@ class Mission:
     robot_radius_m: float = 0.15
     world_step_s: float = 0.1
     record_s: float = 1.0
+    perception: Literal["thermal", "stereo"] = "thermal"
+    stereo_team: bool = False
 
     def __post_init__(self) -> None:
         check_fields(

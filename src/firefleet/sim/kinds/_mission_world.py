@@ -376,6 +376,7 @@ class MissionSensors:
     dt_s: float
     rng: np.random.Generator
     depth_noise: float = 0.03
+    visible: Any = None  # a stereo-only team's camera (_mission_smoke.VisibleDetector)
 
     def read(self, world: MissionWorldState, drive: DriveState) -> Messages:
         """Readings at this tick, by name (module notes)."""
@@ -396,6 +397,9 @@ class MissionSensors:
         out["looked"] = np.full(drive.pose.shape[0], float(looked))
         if not looked:
             out["thermal_detections"] = np.zeros((0, 5))
+            return out
+        if self.visible is not None:  # no thermal camera: the visible one, through smoke
+            out["thermal_detections"] = self.visible.read(world, drive.pose, world.damaged)
             return out
         from firefleet.sim.sensors import render_thermal_grid_depth
 

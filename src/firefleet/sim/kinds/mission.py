@@ -35,6 +35,7 @@ from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
 from firefleet.scenarios._mission import Mission
 from firefleet.scenarios.schema import Scenario
+from firefleet.sim.kinds._mission_smoke import STEREO_METRIC_NAMES, stereo_team_metrics
 from firefleet.sim.kinds._mission_world import (
     FIRE,
     PERSON,
@@ -71,6 +72,7 @@ METRIC_NAMES = (
     "collisions",
     "robots_damaged",
     "water_used_l",
+    *STEREO_METRIC_NAMES,
 )
 
 REFILL_L_S = 2.0
@@ -143,26 +145,35 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     )
 
 
-def _range_sensors(scenario: Scenario, grid: OccupancyGrid, rng: np.random.Generator) -> Any:
+def _range_sensors(
+    scenario: Scenario, grid: OccupancyGrid, rng: np.random.Generator, smoke: Any = None
+) -> Any:
+    from firefleet.sim.kinds._mission_smoke import stereo_scan_params
     from firefleet.sim.kinds.navigate import _sensor_params  # the same sensors, one reading
     from firefleet.sim.ranging import RangeSensors
 
     params = _sensor_params(scenario)
-    if not params:
+    stereo = stereo_scan_params(_command(scenario).perception)  # a stereo-only team's scan
+    if not params and stereo is None:
         return None
     return RangeSensors(
         grid,
         _command(scenario).robot_radius_m,
         ultrasonic=params.get("ultrasonic_range_m"),
         lidar=params.get("lidar_range_m"),
+        stereo=stereo,
         dt_s=scenario.dt_s,
         rng=rng,
+        smoke=smoke,  # smoke dims the lidar and the stereo scan (_mission_smoke)
     )
 
 
 def mission_stages(scenario: Scenario, decider: Decider, rng: np.random.Generator) -> Stages:
     """The mission's stages (module notes)."""
+    from firefleet.sim.kinds._mission_smoke import SmokeAt, VisibleDetector
+    from firefleet.sim.kinds._mission_world import LOWER_LAYER
     from firefleet.sim.sensors import ThermalCameraParams
+    from firefleet.sim.visible import VisibleCameraParams
 
     world = mission_world(scenario)
     spec = scenario.sensors
@@ -172,13 +183,20 @@ def mission_stages(scenario: Scenario, decider: Decider, rng: np.random.Generato
         supersample=thermal.supersample if thermal is not None else 2,
         netd_k=thermal.netd_k if thermal is not None else 0.05,
     )
+    smoke = SmokeAt(world.field, LOWER_LAYER)
+    visible = None
+    if _command(scenario).perception == "stereo":  # no thermal camera: Jin's law in smoke
+        visible = VisibleDetector(
+            _grid(scenario), smoke, world.victim_xy_m, VisibleCameraParams(), rng=rng
+        )
     sensors = MissionSensors(
         world=world,
-        ranging=_range_sensors(scenario, _grid(scenario), rng),
+        ranging=_range_sensors(scenario, _grid(scenario), rng, smoke),
         camera=camera,
         every=max(1, round(1.0 / (rate * scenario.dt_s))),
         dt_s=scenario.dt_s,
         rng=rng,
+        visible=visible,
     )
     stages: Any = dataclasses.replace  # the Stages fields are typed for the default stages
     out: Stages = stages(
@@ -204,6 +222,7 @@ class MissionParams:
 def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
     from firefleet.control.mission import TacticsParams, tactics_init
     from firefleet.control.navigation import DwaParams, NavigationParams
+    from firefleet.sim.kinds._mission_smoke import stereo_scan_params
     from firefleet.sim.kinds.navigate import reading_bearings
 
     cmd = _command(scenario)
@@ -227,7 +246,11 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
             robot_radius_m=cmd.robot_radius_m, dwa=DwaParams(n_v=5, n_omega=9, n_steps=8)
         ),
     )
-    params = MissionParams(tactics, scenario.robot, reading_bearings(scenario), cmd.robots)
+    bearings = reading_bearings(scenario)
+    stereo = stereo_scan_params(cmd.perception)
+    if stereo is not None:  # a stereo-only team navigates with its scan too
+        bearings["stereo_scan_m"] = np.asarray(stereo.bearings_rad)
+    params = MissionParams(tactics, scenario.robot, bearings, cmd.robots)
     if not cmd.robots:
         return None, params
     return tactics_init(_grid(scenario), scenario.initial_poses, tactics), params
@@ -438,6 +461,7 @@ def mission_metrics(result: SimResult) -> Metrics:
         "collisions": float(collided),
         "robots_damaged": float(np.count_nonzero(np.asarray(x["damaged"]) > 0.5)),
         "water_used_l": [float(v) for v in np.asarray(x["water_used_l"])],
+        **stereo_team_metrics(scenario, mission_metrics),  # NaN unless command.stereo_team
     }
 
 
