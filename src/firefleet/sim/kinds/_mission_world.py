@@ -45,6 +45,7 @@ from firefleet.world import (
     HEAT,
     SMOKE,
     UNBURNT,
+    FieldParams,
     FireParams,
     FireState,
     OccupancyGrid,
@@ -176,6 +177,7 @@ class MissionWorld:
     fire_params: FireParams = dataclasses.field(default_factory=FireParams)
     spray_params: SprayParams = dataclasses.field(default_factory=SprayParams)
     victim_params: VictimParams = dataclasses.field(default_factory=VictimParams)
+    smoke_params: FieldParams = SMOKE  # world.fuel.smoke_yield scales its source
     found_radius_m: float = 2.0
 
     def init(self, n_robots: int) -> MissionWorldState:
@@ -261,7 +263,7 @@ class MissionWorld:
         burning = fire.state == BURNING
         temp = diffuse_step(temp, open_cells, burning, HEAT, dt, self.field.resolution_m)
         smoke = diffuse_step(
-            state.smoke_per_m, open_cells, burning, SMOKE, dt, self.field.resolution_m
+            state.smoke_per_m, open_cells, burning, self.smoke_params, dt, self.field.resolution_m
         )
         vr, vc = self.victim_cells[:, 0], self.victim_cells[:, 1]
         victims = victim_step(

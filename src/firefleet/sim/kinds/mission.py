@@ -123,7 +123,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     fuel[field.occupied] = 0.0
     fires = np.array([[f.x_m, f.y_m] for f in spec.fires], dtype=float).reshape(-1, 2)
     victims = np.array([[v.x_m, v.y_m] for v in spec.victims], dtype=float).reshape(-1, 2)
-    from firefleet.world import FireParams, SprayParams
+    from firefleet.world import SMOKE, FireParams, SprayParams
 
     return MissionWorld(
         field=field,
@@ -142,6 +142,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
         seed=scenario.seed,
         spray_params=SprayParams(flow_l_s=cmd.flow_l_s, range_m=cmd.spray_range_m),
         fire_params=FireParams(spread_m_s=spec.spread_m_s),
+        smoke_params=dataclasses.replace(SMOKE, source=SMOKE.source * spec.fuel.smoke_yield),
     )
 
 
@@ -217,6 +218,7 @@ class MissionParams:
     geometry: Any
     bearings_rad: dict[str, FloatArray]
     robots: bool
+    arrive_s: float = 0.0
 
 
 def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
@@ -250,7 +252,7 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
     stereo = stereo_scan_params(cmd.perception)
     if stereo is not None:  # a stereo-only team navigates with its scan too
         bearings["stereo_scan_m"] = np.asarray(stereo.bearings_rad)
-    params = MissionParams(tactics, scenario.robot, bearings, cmd.robots)
+    params = MissionParams(tactics, scenario.robot, bearings, cmd.robots, cmd.arrive_s)
     if not cmd.robots:
         return None, params
     return tactics_init(_grid(scenario), scenario.initial_poses, tactics), params
@@ -299,6 +301,9 @@ def mission_decide(
     if not params.robots:
         zero = np.zeros((n, 2))
         return state, WheelCommand(reference_rad_s=zero, series={"tank_l": tank})
+    if inputs.t_s < params.arrive_s:  # the team has not entered yet: it waits, idle
+        idle = {"mode": np.full(n, 4.0), "spray": np.zeros(n), "tank_l": tank}  # MODES[4]
+        return state, WheelCommand(reference_rad_s=np.zeros((n, 2)), series=idle)
     rows = np.asarray(inputs.readings["thermal_detections"]).reshape(-1, 5)
     fire_xy, fire_robot = _on_map(rows, pose, FIRE)
     person_xy, person_robot = _on_map(rows, pose, PERSON)
