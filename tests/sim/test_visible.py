@@ -75,6 +75,8 @@ def test_field_of_view_range_walls_and_darkness() -> None:
     assert lit.seen[0].tolist() == [True, False, True, False, False, True]
     far = visible_view(grid, pose, [[7.5, 3.5]], [False], params)  # 6.7 m > 6 m
     assert not far.seen[0, 0]
+    near = visible_view(grid, pose, [[1.9, 2.0], [2.1, 2.0]], [False, False], params)
+    assert near.seen[0].tolist() == [False, True]  # nearer than 1 m: the frame cuts them
     dark = visible_view(
         grid, pose, targets[:1].repeat(2, 0), [False, True], VisibleCameraParams(lit=False)
     )

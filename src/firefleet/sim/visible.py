@@ -3,7 +3,7 @@
 A robot without a thermal camera finds people and fires with its stereo pair's
 visible-light camera. This module is that sensor's model of the scene, not a shortcut
 from the world's truth: a target (a person, a flame) is seen when it lies in the
-camera's field of view, within its range, in line of sight on the map (no wall cell
+camera's field of view, within its range (1 to 10 m), in line of sight on the map (no wall cell
 on the segment between them: the same exact ray casting as the range sensors), and
 bright enough against its surround after the smoke along that line of sight.
 
@@ -58,9 +58,12 @@ class VisibleCameraParams:
     hfov_rad : float
         Horizontal field of view [rad] (the stereo pair's, ``2 atan(640 / (2 x 600))``:
         56 deg, as :class:`firefleet.sim.ranging.StereoScanParams`).
-    max_range_m : float
-        Farthest range at which the detector names a person in clear air [m]
-        (a 0.5 m wide person is 30 px wide at 10 m with a 600 px focal length).
+    min_range_m, max_range_m : float
+        Nearest and farthest range at which the detector names a target [m]: nearer
+        than 1 m less than half a standing person fits in the frame (vertical field
+        of view ``2 atan(240 / 600)``, 44 deg: 0.85 m of them at 1.05 m), as the
+        thermal detector cannot name a person the frame cuts; beyond 10 m a 0.5 m wide
+        person is under 30 px wide (600 px focal length).
     reflecting_k : float
         Jin's constant for a light-reflecting object (a person): 3.
     emitting_k : float
@@ -76,6 +79,7 @@ class VisibleCameraParams:
     """
 
     hfov_rad: float = 2.0 * math.atan(640.0 / (2.0 * 600.0))
+    min_range_m: float = 1.0
     max_range_m: float = 10.0
     reflecting_k: float = 3.0
     emitting_k: float = 8.0
@@ -86,7 +90,13 @@ class VisibleCameraParams:
             self,
             "visible camera",
             positive=("hfov_rad", "max_range_m", "reflecting_k", "emitting_k"),
+            non_negative=("min_range_m",),
         )
+        if not self.min_range_m < self.max_range_m:
+            raise InputError(
+                f"visible camera: min_range_m {self.min_range_m} must be below max_range_m "
+                f"{self.max_range_m}"
+            )
         if self.hfov_rad >= 2.0 * math.pi:
             raise InputError(f"visible camera: hfov_rad must be < 2 pi, got {self.hfov_rad}")
 
@@ -182,6 +192,7 @@ def visible_view(
     k = np.where(glow, params.emitting_k, params.reflecting_k)
     lit = glow | params.lit
     cand = (np.abs(bearing) <= 0.5 * params.hfov_rad) & (rng_m <= params.max_range_m)
+    cand &= rng_m >= params.min_range_m
     cand &= lit[None, :]
     depth = np.full((n, m), np.nan)
     seen = np.zeros((n, m), dtype=bool)
