@@ -36,8 +36,8 @@ References
 .. [3] D. Gallup et al., "Variable baseline/resolution stereo", CVPR 2008 (stereo depth
    error grows with depth squared: ``dZ = Z^2 dd / (f B)``).
 .. [4] J. W. Starr, B. Y. Lattimer, "Evaluation of navigation sensors in fire smoke
-   environments", Fire Technology 50, 2014 (lidar and visible cameras degrade in smoke,
-   thermal cameras and sonar do not).
+   environments", Fire Technology 50, 2014 (lidar and stereo vision degrade in dense
+   smoke; a thermal camera and radar see through it).
 
 **Smoke** (optional ``smoke=`` :class:`SmokeField`, default None: no smoke, the same
 ranges bit for bit): the lidar and the stereo scan see by visible or near-infrared
@@ -46,8 +46,9 @@ light, which the smoke dims by Beer-Lambert's law along each ray
 (``SmokeField.lidar`` / ``.stereo``, :class:`SmokeOptics`: two-way transmittance at
 least 0.01 for the lidar, one-way contrast ``exp(-tau) >= exp(-3)`` for the stereo
 pair) before it reaches the wall is a dropout: it reads as a miss (``inf``), the rule
-of this model (no spurious return from the smoke itself). The ultrasonic ring (sound)
-takes no ``smoke``.
+of this model (no spurious return from the smoke itself). The ultrasonic ring takes no
+``smoke``: sound's wavelength (about 8 mm at 40 kHz) is long against soot particles
+(under a micrometre), which scatter it negligibly.
 """
 
 from __future__ import annotations
