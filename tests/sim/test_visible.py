@@ -114,6 +114,7 @@ def test_stereo_only_detector_sees_the_person_in_clear_air_not_in_dense_smoke() 
         if len(person):
             assert person[0, 3] == pytest.approx(2.0)
         fire = rows[rows[:, 1] == 0.0]
+        assert np.isinf(fire[0, 4])  # flames: light-emitting, no temperature measured
         np.testing.assert_allclose(fire[0, 3], math.hypot(3.5, 0.125), rtol=1e-9)  # their mean
     damaged = det.read(world, pose, np.ones(1, bool))
     assert damaged.shape == (0, 5)

@@ -123,7 +123,9 @@ class VisibleDetector:
 
     def read(self, world: Any, pose: FloatArray, damaged: Any) -> FloatArray:
         """Detections (K, 5): robot, kind (0 fire, 1 person), bearing [rad], range [m],
-        peak (NaN: a visible camera measures no temperature)."""
+        peak [C]: a visible camera measures no temperature, so NaN for a person and
+        ``inf`` for a fire (what it sees of a fire is flames, light-emitting: the
+        tactics' ``peak >= flame_c`` test for flames holds)."""
         import scipy.ndimage as ndi
 
         field = self.smoke.field
@@ -160,7 +162,7 @@ class VisibleDetector:
                 xy = flames[pick].mean(axis=0)
                 dx, dy = xy - pose[i, :2]
                 bearing = math.remainder(math.atan2(dy, dx) - pose[i, 2], math.tau)
-                rows.append([float(i), 0.0, bearing, math.hypot(dx, dy), math.nan])
+                rows.append([float(i), 0.0, bearing, math.hypot(dx, dy), math.inf])
         out = np.array(rows, dtype=float).reshape(-1, 5)
         if len(out):
             out[:, 3] *= 1.0 + self.depth_noise * self.rng.standard_normal(len(out))
