@@ -80,6 +80,9 @@ class TacticsParams:
     fire_block_m : float
         Paths never pass within this distance of a burning spot [m] (0: none), except
         within 1 m of a robot (it can always leave).
+    reslot_s : float
+        A fighter standing at its slot this long without a burning spot in reach and
+        in sight gets a new slot [s].
     robot_per_fire_m : float
         A fire needs one robot more per this many metres of its extent's radius.
     fire_robots_min, fire_robots_max : int
@@ -143,6 +146,7 @@ class TacticsParams:
     fire_keepout_m: float = 1.5
     fire_cost: float = 20.0
     fire_block_m: float = 0.75
+    reslot_s: float = 4.0
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -180,6 +184,7 @@ class TacticsParams:
                 "fire_merge_m",
                 "victim_merge_m",
                 "robot_per_fire_m",
+                "reslot_s",
                 "replan_s",
                 "explore_replan_s",
                 "coverage_period_s",

@@ -6,6 +6,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import scipy.ndimage as ndi
 
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import cone_coverage, line_of_sight
@@ -81,6 +82,26 @@ def _retarget(state: TacticsState, goals: FloatArray, pose: FloatArray) -> Tacti
     return replace(state, nav=nav, goal_xy_m=goals, closest_m=closest, closest_s=since)
 
 
+def _reachable(costmap: Costmap, xy_m: FloatArray) -> BoolArray:
+    """Map cells connected (8-neighbours) through unblocked cells to any of the points
+    (M, 2) [m]: where the robots there can plan to."""
+    free = ~np.asarray(costmap.blocked)
+    labels, _ = ndi.label(free, structure=np.ones((3, 3), dtype=bool))
+    rc = costmap.grid.cell_of(np.asarray(xy_m, dtype=float).reshape(-1, 2))
+    h, w = free.shape
+    lab = labels[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+    lab = lab[lab > 0]
+    out: BoolArray = np.isin(labels, lab) if len(lab) else free
+    return out
+
+
+def shot_limits_m(params: TacticsParams) -> tuple[float, float]:
+    """Nearest and farthest a fighter's shot may be [m]: a quarter metre outside the
+    cells paths never enter (``fire_block_m``), and half a metre inside the nozzle's
+    reach (a spot is where a detection put the flames, within the detector's error)."""
+    return params.fire_block_m + 0.25, max(params.spray_range_m - 0.5, 0.5 * params.spray_range_m)
+
+
 def _fight_goals(
     state: TacticsState,
     pose: FloatArray,
@@ -89,8 +110,12 @@ def _fight_goals(
     goals: FloatArray,
     params: TacticsParams,
 ) -> None:
-    """Ring slots of every fought fire into ``goals`` (kept while its team is unchanged)."""
+    """Ring slots of every fought fire into ``goals`` (kept while its team is unchanged
+    and every slot is set)."""
     ids, fxy, fext = fires_of(state.knowledge)
+    reach: BoolArray | None = None
+    near_m, shot_m = shot_limits_m(params)
+    gap = 2.0 * params.nav.robot_radius_m + params.nav.margin_m + 0.15
     for j, fid in enumerate(ids):
         team = np.flatnonzero(task_fire == fid)
         if len(team) == 0:
@@ -98,10 +123,20 @@ def _fight_goals(
         same = np.all(old_fire[team] == fid) and np.sum(old_fire == fid) == len(team)
         if same and np.isfinite(goals[team, 0]).all():
             continue
+        if reach is None:
+            reach = _reachable(state.nav.costmap, pose[:, :2])
         radius = fext[j] + params.standoff_m
-        reach = fext[j] + params.spray_range_m
         goals[team] = ring_slots(
-            state.coarse, state.nav.costmap, fxy[j], radius, reach, pose[team, :2]
+            state.coarse,
+            state.nav.costmap,
+            fxy[j],
+            radius,
+            pose[team, :2],
+            spots_xy_m=state.knowledge.spot_xy_m[state.knowledge.spot_fire == fid],
+            reachable=reach,
+            near_m=near_m,
+            shot_m=shot_m,
+            gap_m=gap,
         )
 
 
@@ -276,24 +311,41 @@ def _orders(
     spray = np.zeros(n, dtype=bool)
     ids, fxy, _ = fires_of(state.knowledge)
     k = state.knowledge
+    shot_s = np.where((mode == FIGHT) & at_goal, state.shot_s, obs.t_s)
+    goals = state.goal_xy_m
     for i in map(int, np.flatnonzero(mode == FIGHT)):
         j = np.flatnonzero(ids == state.task_fire[i])
         if len(j) == 0:
             continue
-        c = fxy[int(j[0])]
+        # aim at the nearest burning spot in reach and in sight (a spot sprayed out is
+        # soon seen not burning and dropped: the aim sweeps on to the next); without
+        # one, face the fire's centre
         spots = k.spot_xy_m[k.spot_fire == state.task_fire[i]]
-        err = float(_wrap(np.arctan2(c[1] - pose[i, 1], c[0] - pose[i, 0]) - pose[i, 2]))
+        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
+        near = np.flatnonzero(d <= params.spray_range_m)
+        if len(near):
+            sight = line_of_sight(
+                state.coarse, np.repeat(pose[i : i + 1, :2], len(near), 0), spots[near]
+            )
+            near = near[sight]
+        target = spots[near[int(np.argmin(d[near]))]] if len(near) else fxy[int(j[0])]
+        err = float(_wrap(np.arctan2(target[1] - pose[i, 1], target[0] - pose[i, 0]) - pose[i, 2]))
         if at_goal[i]:
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
-        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
-        s = int(np.argmin(d))
+        if len(near):
+            shot_s[i] = obs.t_s
         spray[i] = (
-            abs(err) <= params.spray_half_angle_rad
-            and d[s] <= params.spray_range_m
-            and obs.tank_l[i] > 0.0
-            and bool(line_of_sight(state.coarse, pose[i : i + 1, :2], spots[s : s + 1])[0])
+            bool(len(near)) and abs(err) <= params.spray_half_angle_rad and obs.tank_l[i] > 0.0
         )
+    # a fighter that has stood without a shot for reslot_s gets a new slot (next plan)
+    reslot = (mode == FIGHT) & at_goal & (obs.t_s - shot_s >= params.reslot_s)
+    pending = state.pending
+    if reslot.any():
+        goals = goals.copy()
+        goals[reslot] = np.nan
+        shot_s[reslot] = obs.t_s
+        pending = True
     for i in map(int, np.flatnonzero((mode == CONFIRM) & at_goal)):
         vic = k.victim_xy_m[state.task_victim[i]]
         err = float(_wrap(np.arctan2(vic[1] - pose[i, 1], vic[0] - pose[i, 0]) - pose[i, 2]))
@@ -314,7 +366,15 @@ def _orders(
         mode=mode.astype(np.int8),
         goal_xy_m=state.goal_xy_m.copy(),
     )
-    return replace(state, nav=nav, orders=orders, refilling=refilling)
+    return replace(
+        state,
+        nav=nav,
+        orders=orders,
+        refilling=refilling,
+        shot_s=shot_s,
+        goal_xy_m=goals,
+        pending=pending,
+    )
 
 
 def _tank_changes(
@@ -327,6 +387,10 @@ def _tank_changes(
     """Empty tanks go to refill at once; full ones come back (an allocation follows)."""
     mode = state.mode
     empty = working & (tank <= _empty_l(params)) & (mode != REFILL)
+    if len(state.knowledge.spot_xy_m):
+        # while a fire burns, a robot off the fires with a low tank tops it up
+        idle = (mode == EXPLORE) | (mode == IDLE)
+        empty |= working & idle & (tank < params.low_tank_frac * params.tank_l)
     full = (mode == REFILL) & (tank >= 0.98 * params.tank_l)
     if not (empty.any() or full.any()):
         return state

@@ -223,8 +223,12 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
         # the lighter dynamic window (5 x 9 candidates over 8 steps, control.mission's
         # notes): four times cheaper than navigate's 9 x 21 x 15, and on mission-office
         # seed 0 the finer one left a victim unfound and two robots touching
+        # DWA's disc is the robot's plus the planner's margin (0.05 m): it avoids the
+        # teammates where their dead-reckoned estimates put them, a few cm off (mission-office
+        # seed 0: two robots touched at 0.293 m between centres with the bare radius)
         nav=NavigationParams(
-            robot_radius_m=cmd.robot_radius_m, dwa=DwaParams(n_v=5, n_omega=9, n_steps=8)
+            robot_radius_m=cmd.robot_radius_m,
+            dwa=DwaParams(n_v=5, n_omega=9, n_steps=8, robot_radius_m=cmd.robot_radius_m + 0.05),
         ),
     )
     params = MissionParams(tactics, scenario.robot, reading_bearings(scenario), cmd.robots)
