@@ -231,7 +231,7 @@ def test_a_victim_looked_at_without_a_person_is_dismissed_until_seen_again() -> 
 def test_paths_go_round_a_known_fire() -> None:
     from dataclasses import replace
 
-    from firefleet.control.mission._step import _fire_costmap
+    from firefleet.control.mission._fight import fire_costmap
     from firefleet.control.navigation import astar
 
     state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
@@ -240,7 +240,7 @@ def test_paths_go_round_a_known_fire() -> None:
     plain = astar(state.nav.costmap, start, goal).xy_m
     assert plain is not None
     assert np.hypot(*(plain - [6.0, 5.0]).T).min() < 0.1  # straight through it
-    hot = _fire_costmap(replace(state, knowledge=k), np.array([[2.0, 5.0, 0.0]]), P).nav.costmap
+    hot = fire_costmap(replace(state, knowledge=k), np.array([[2.0, 5.0, 0.0]]), P).nav.costmap
     around = astar(hot, start, goal).xy_m
     assert around is not None
     assert np.hypot(*(around - [6.0, 5.0]).T).min() >= P.fire_keepout_m - 0.05
@@ -248,7 +248,7 @@ def test_paths_go_round_a_known_fire() -> None:
     # from the fire can still plan its way out
     grid = hot.grid
     assert hot.blocked[tuple(grid.cell_of([6.0, 5.6]))]
-    near = _fire_costmap(replace(state, knowledge=k), np.array([[6.5, 5.0, 0.0]]), P)
+    near = fire_costmap(replace(state, knowledge=k), np.array([[6.5, 5.0, 0.0]]), P)
     assert not near.nav.costmap.blocked[tuple(grid.cell_of([6.5, 5.0]))]
     out = astar(near.nav.costmap, np.array([6.5, 5.0]), goal)
     assert out.found

@@ -39,7 +39,8 @@ def test_has_shot_is_distance_and_sight() -> None:
         ok = (d >= near) & (d <= reach)
         ok[ok] &= sight(grid, pts[ok], np.broadcast_to(s, (int(ok.sum()), 2)))
         want |= ok
-    assert want.sum() > 20 and (~want).sum() > 20
+    assert want.sum() > 20
+    assert (~want).sum() > 20
     assert np.mean(got == want) >= 0.97, np.mean(got == want)  # coarse vs fine cells
 
 
@@ -74,6 +75,7 @@ def test_slots_of_a_fire_behind_a_door_are_reachable_and_have_a_shot() -> None:
     for s in slots:
         d = np.hypot(*(spots - s).T)
         ok = (d >= 1.0) & (d <= 3.0)
-        assert ok.any() and sight(grid, np.repeat(s[None], ok.sum(), 0), spots[ok]).any(), s
+        assert ok.any(), s
+        assert sight(grid, np.repeat(s[None], ok.sum(), 0), spots[ok]).any(), s
     gaps = np.hypot(*(slots[:, None] - slots[None]).transpose(2, 0, 1))
     assert gaps[np.triu_indices(3, 1)].min() >= 0.5 - 1e-9, gaps
