@@ -75,6 +75,8 @@ def fight_goals(
             near_m=near_m,
             shot_m=shot_m,
             gap_m=gap,
+            avoid_xy_m=state.hot_xy_m,
+            avoid_m=params.standoff_m,
         )
 
 

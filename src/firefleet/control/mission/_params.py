@@ -83,6 +83,9 @@ class TacticsParams:
     reslot_s : float
         A fighter standing at its slot this long without a burning spot in reach and
         in sight gets a new slot [s].
+    retreat_c : float
+        A fighter in air this hot leaves its place: the place joins the team's hot
+        places, which slots keep ``standoff_m`` from [C] (a robot's rating is higher).
     robot_per_fire_m : float
         A fire needs one robot more per this many metres of its extent's radius.
     fire_robots_min, fire_robots_max : int
@@ -147,6 +150,7 @@ class TacticsParams:
     fire_cost: float = 20.0
     fire_block_m: float = 0.75
     reslot_s: float = 4.0
+    retreat_c: float = 200.0
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -185,6 +189,7 @@ class TacticsParams:
                 "victim_merge_m",
                 "robot_per_fire_m",
                 "reslot_s",
+                "retreat_c",
                 "replan_s",
                 "explore_replan_s",
                 "coverage_period_s",
@@ -259,6 +264,8 @@ class TacticsObservation:
         Robots whose thermal frame was taken (and run through the detector) this tick;
         ``None``: every robot's. Only a look that sees no fire where a fire is believed
         counts against it.
+    air_c : ndarray, shape (N,) or None
+        Air temperature at each robot (its PT100) [C]; ``None``: not measured.
     """
 
     t_s: float
@@ -272,6 +279,7 @@ class TacticsObservation:
     damaged: BoolArray
     alive: BoolArray
     looked: BoolArray | None = None
+    air_c: FloatArray | None = None
 
 
 @dataclass(frozen=True, eq=False)

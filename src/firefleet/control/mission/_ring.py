@@ -111,6 +111,15 @@ def has_shot(
     return out
 
 
+def _clear(pts: FloatArray, others: FloatArray, dist_m: float) -> BoolArray:
+    """Points (P, 2) at least ``dist_m`` from every one of ``others`` (K, 2)."""
+    if len(others) == 0 or len(pts) == 0:
+        return np.ones(len(pts), dtype=bool)
+    d = np.hypot(pts[:, None, 0] - others[None, :, 0], pts[:, None, 1] - others[None, :, 1])
+    out: BoolArray = d.min(axis=1) >= dist_m
+    return out
+
+
 def _valid(
     cm: CoarseMap,
     costmap: Costmap,
@@ -119,15 +128,19 @@ def _valid(
     near_m: float,
     shot_m: float,
     pts: FloatArray,
+    avoid: FloatArray,
+    avoid_m: float,
 ) -> BoolArray:
-    """Slots a robot may stand on (open), can get to (``reachable``, on the map grid) and
-    spray the fire from (:func:`has_shot`)."""
+    """Slots a robot may stand on (open, ``near_m`` from every spot and ``avoid_m`` from
+    every hot place), can get to (``reachable``, on the map grid) and spray the fire
+    from (:func:`has_shot`)."""
     grid = costmap.grid
     inside = grid.contains(pts)
     rc = grid.cell_of(pts)
     h, w = grid.shape
     r, c = np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)
     open_ = inside & ~costmap.blocked[r, c] & reachable[r, c]
+    open_ &= _clear(pts, spots, near_m) & _clear(pts, avoid, avoid_m)
     out: BoolArray = open_ & has_shot(cm, pts, spots, near_m, shot_m)
     return out
 
@@ -144,6 +157,8 @@ def ring_slots(
     near_m: float = 0.0,
     shot_m: float = math.inf,
     gap_m: float = 0.0,
+    avoid_xy_m: FloatArray | None = None,
+    avoid_m: float = 0.0,
 ) -> FloatArray:
     """Each robot's slot on the ring about a fire (module notes).
 
@@ -173,6 +188,10 @@ def ring_slots(
         Nearest and farthest a slot's shot may be [m].
     gap_m : float
         Least distance between two slots moved off the ring [m].
+    avoid_xy_m : ndarray, shape (K, 2), optional
+        Places too hot to stand (where a robot's air reached its retreat temperature).
+    avoid_m : float
+        Least distance of a slot from them [m].
 
     Returns
     -------
@@ -184,8 +203,10 @@ def ring_slots(
     spots = c[None] if spots_xy_m is None else np.asarray(spots_xy_m, dtype=float).reshape(-1, 2)
     reach = np.ones(costmap.grid.shape, dtype=bool) if reachable is None else reachable
 
+    avoid = np.zeros((0, 2)) if avoid_xy_m is None else np.asarray(avoid_xy_m).reshape(-1, 2)
+
     def valid(pts: FloatArray) -> BoolArray:
-        return _valid(cm, costmap, reach, spots, near_m, shot_m, pts)
+        return _valid(cm, costmap, reach, spots, near_m, shot_m, pts, avoid, avoid_m)
 
     m = len(robots)
     ring = regular_ring(c, radius_m, robots)

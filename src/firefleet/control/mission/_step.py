@@ -250,7 +250,8 @@ def _orders(
     scan = (mode == EXPLORE) & arrived
     v[scan] = 0.0
     w[scan] = params.scan_omega_rad_s
-    refilling = (mode == REFILL) & at_goal
+    # refilling only by the refill point (not where a blocked path left it)
+    refilling = (mode == REFILL) & at_goal & (d <= params.refill_radius_m)
     stop = (mode == DAMAGED) | refilling | (mode == IDLE)
     v[stop] = 0.0
     w[stop] = 0.0
@@ -316,6 +317,33 @@ def _tank_changes(
         pending=True,
     )
     return _retarget(new, goals, pose)
+
+
+def _too_hot(
+    state: TacticsState,
+    pose: FloatArray,
+    air_c: FloatArray,
+    working: BoolArray,
+    params: TacticsParams,
+) -> TacticsState:
+    """A robot in air of ``retreat_c`` or more marks its place hot (once per half metre);
+    a fighter there gets a new slot at the next plan."""
+    hot = working & (air_c >= params.retreat_c)
+    if not hot.any():
+        return state
+    known = state.hot_xy_m
+    new: list[FloatArray] = []
+    for i in map(int, np.flatnonzero(hot)):
+        pts = np.vstack([known, *new]) if new else known
+        if len(pts) == 0 or np.hypot(*(pts - pose[i, :2]).T).min() > 0.5:
+            new.append(pose[i : i + 1, :2].copy())
+    if not new:
+        return state
+    fresh = np.vstack(new)
+    goals = state.goal_xy_m.copy()
+    leave = hot & (state.mode == FIGHT)
+    goals[leave] = np.nan
+    return replace(state, hot_xy_m=np.vstack([known, fresh]), goal_xy_m=goals, pending=True)
 
 
 def _dropped(state: TacticsState, pose: FloatArray, lost: BoolArray) -> TacticsState:
@@ -455,6 +483,8 @@ def tactics_step(
             messages_sent=state.messages_sent + len(fire_xy) + len(person_xy),
         )
     state = _tank_changes(state, pose, tank, working, params)
+    if obs.air_c is not None:
+        state = _too_hot(state, pose, np.asarray(obs.air_c, dtype=float), working, params)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(
             state.coarse, pose[working], params.sensing_range_m, params.hfov_rad

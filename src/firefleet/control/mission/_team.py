@@ -60,6 +60,9 @@ class TacticsState:
     shot_s : ndarray, shape (N,)
         When each fighter last had a shot at its fire, or last moved [s]: one that
         stands ``reslot_s`` without one gets a new slot.
+    hot_xy_m : ndarray, shape (K, 2)
+        Places where a robot's air reached ``retreat_c`` [m]: slots keep ``standoff_m``
+        from them.
     pending : bool
         A detection or a robot's state changed since the last allocation.
     last_plan_s, next_coverage_s, next_nav_s : float
@@ -97,6 +100,7 @@ class TacticsState:
     closest_m: FloatArray
     closest_s: FloatArray
     shot_s: FloatArray
+    hot_xy_m: FloatArray
     pending: bool
     last_plan_s: float
     next_coverage_s: float
@@ -256,6 +260,7 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         closest_m=np.full(n, np.inf),
         closest_s=np.zeros(n),
         shot_s=np.zeros(n),
+        hot_xy_m=np.zeros((0, 2)),
         pending=True,
         last_plan_s=-np.inf,
         next_coverage_s=-np.inf,
