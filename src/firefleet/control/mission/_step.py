@@ -194,28 +194,30 @@ def _orders(
     # a fighter or confirmer that has come no closer to its spot in stall_s settles
     # where it is (navigation told it has arrived, so that no teammate waits for it)
     # (a refiller too, if that is within refill_radius_m of its spot)
-    d = np.hypot(pose[:, 0] - state.goal_xy_m[:, 0], pose[:, 1] - state.goal_xy_m[:, 1])
+    d_goal = np.hypot(pose[:, 0] - state.goal_xy_m[:, 0], pose[:, 1] - state.goal_xy_m[:, 1])
     settle = (
-        ((mode == FIGHT) | (mode == CONFIRM) | ((mode == REFILL) & (d <= params.refill_radius_m)))
+        (
+            (mode == FIGHT)
+            | (mode == CONFIRM)
+            | ((mode == REFILL) & (d_goal <= params.refill_radius_m))
+        )
         & ~at_goal
         & (obs.t_s - state.closest_s >= params.stall_s)
     )
-    if settle.any():
-        nav = navigation_retarget(nav, pose[:, :2], settle)
-        at_goal = at_goal | settle
     w_max = params.nav.dwa.omega_max_rad_s
     spray = np.zeros(n, dtype=bool)
     ids, fxy, _ = fires_of(state.knowledge)
     k = state.knowledge
     shot_s = np.where((mode == FIGHT) & at_goal, state.shot_s, obs.t_s)
     goals = state.goal_xy_m
+    half = params.spray_half_angle_rad
     for i in map(int, np.flatnonzero(mode == FIGHT)):
         j = np.flatnonzero(ids == state.task_fire[i])
         if len(j) == 0:
             continue
-        # aim at the nearest burning spot in reach and in sight (a spot sprayed out is
-        # soon seen not burning and dropped: the aim sweeps on to the next); without
-        # one, face the fire's centre
+        # aim at the burning spots in reach and in sight, where the cone holds the most
+        # (a spot sprayed out is soon seen not burning and dropped: the aim sweeps on);
+        # without one, face the fire's centre
         spots = k.spot_xy_m[k.spot_fire == state.task_fire[i]]
         d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
         near = np.flatnonzero(d <= params.spray_range_m)
@@ -224,16 +226,27 @@ def _orders(
                 state.coarse, np.repeat(pose[i : i + 1, :2], len(near), 0), spots[near]
             )
             near = near[sight]
-        target = spots[near[int(np.argmin(d[near]))]] if len(near) else fxy[int(j[0])]
+        if len(near):
+            rel = spots[near] - pose[i, :2]
+            bearing = np.arctan2(rel[:, 1], rel[:, 0])
+            held = (np.abs(_wrap(bearing[:, None] - bearing[None, :])) <= half).sum(axis=1)
+            best = np.lexsort((d[near], -held))[0]
+            target = spots[near[best]]
+            shot_s[i] = obs.t_s
+            # held up on its way (no closer in the navigation's stuck time) with a shot
+            # already: it stops there and sprays
+            if not at_goal[i] and obs.t_s - state.closest_s[i] >= params.nav.stuck_time_s:
+                settle[i] = True
+        else:
+            target = fxy[int(j[0])]
         err = float(_wrap(np.arctan2(target[1] - pose[i, 1], target[0] - pose[i, 0]) - pose[i, 2]))
-        if at_goal[i]:
+        if at_goal[i] or settle[i]:
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
-        if len(near):
-            shot_s[i] = obs.t_s
-        spray[i] = (
-            bool(len(near)) and abs(err) <= params.spray_half_angle_rad and obs.tank_l[i] > 0.0
-        )
+        spray[i] = bool(len(near)) and abs(err) <= half and obs.tank_l[i] > 0.0
+    if settle.any():
+        nav = navigation_retarget(nav, pose[:, :2], settle)
+        at_goal = at_goal | settle
     # a fighter that has stood without a shot for reslot_s gets a new slot (next plan)
     reslot = (mode == FIGHT) & at_goal & (obs.t_s - shot_s >= params.reslot_s)
     pending = state.pending
@@ -251,7 +264,7 @@ def _orders(
     v[scan] = 0.0
     w[scan] = params.scan_omega_rad_s
     # refilling only by the refill point (not where a blocked path left it)
-    refilling = (mode == REFILL) & at_goal & (d <= params.refill_radius_m)
+    refilling = (mode == REFILL) & at_goal & (d_goal <= params.refill_radius_m)
     stop = (mode == DAMAGED) | refilling | (mode == IDLE)
     v[stop] = 0.0
     w[stop] = 0.0
