@@ -160,3 +160,30 @@ def test_a_third_of_the_team_keeps_exploring_while_floor_is_unsearched() -> None
         assert world.state.explored_frac < 0.9
         assert int((world.state.task_fire >= 0).sum()) == fighters
         assert int((world.state.mode == EXPLORE).sum()) == 3 - fighters
+
+
+def test_tanks_fill_only_by_the_refill_point() -> None:
+    """Two fighters on a fire of two spots, small tanks: each tank rises only while its
+    robot stands within refill_radius_m of the refill point (checked on every logged
+    tick), and both go and refill."""
+    p = TacticsParams(
+        nav=FAST_NAV,
+        fire_robots_min=2,
+        fire_robots_max=2,
+        sensing_range_m=6.0,
+        explore_frac=0.0,
+        tank_l=4.0,
+        flow_l_s=0.5,
+        refill_l_s=2.0,
+        refill_xy_m=(1.5, 2.0),
+    )
+    fire = np.array([[7.0, 5.0], [7.5, 5.5]])
+    start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0]])
+    world = World(room(), p, start, fire_xy=fire, water_l=1e9)
+    world.run(90.0)
+    tank = np.array([e["tank"] for e in world.log])
+    pose = np.array([e["pose"] for e in world.log])
+    rose = np.diff(tank, axis=0) > 1e-9
+    near = np.hypot(pose[:-1, :, 0] - 1.5, pose[:-1, :, 1] - 2.0) <= p.refill_radius_m + 0.05
+    assert rose.any(axis=0).all(), "a robot never refilled"
+    assert np.all(near[rose]), "a tank rose away from the refill point"
