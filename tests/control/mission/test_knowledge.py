@@ -244,13 +244,13 @@ def test_paths_go_round_a_known_fire() -> None:
     around = astar(hot, start, goal).xy_m
     assert around is not None
     assert np.hypot(*(around - [6.0, 5.0]).T).min() >= P.fire_keepout_m - 0.05
-    # blocked within fire_block_m of it, but not round a robot: one standing 0.5 m
-    # from the fire can still plan its way out
+    # within fire_block_m of it: 1 + 11 fire_cost per metre (never blocked: a robot
+    # standing 0.5 m from the fire can always plan its way out)
     grid = hot.grid
-    assert hot.blocked[tuple(grid.cell_of([6.0, 5.6]))]
-    near = fire_costmap(replace(state, knowledge=k), np.array([[6.5, 5.0, 0.0]]), P)
-    assert not near.nav.costmap.blocked[tuple(grid.cell_of([6.5, 5.0]))]
-    out = astar(near.nav.costmap, np.array([6.5, 5.0]), goal)
+    rc = tuple(grid.cell_of([6.0, 5.6]))
+    assert not hot.blocked[rc]
+    assert hot.cost[rc] == pytest.approx(state.nav.costmap.cost[rc] + 11 * P.fire_cost)
+    out = astar(hot, np.array([6.5, 5.0]), goal)
     assert out.found
 
 

@@ -20,16 +20,26 @@ from firefleet.world import OccupancyGrid
 __all__ = ["fight_goals", "fire_costmap", "shot_limits_m"]
 
 
-def _reachable(costmap: Costmap, xy_m: FloatArray) -> BoolArray:
+def _reachable(blocked: BoolArray, grid: OccupancyGrid, xy_m: FloatArray) -> BoolArray:
     """Map cells connected (8-neighbours) through unblocked cells to any of the points
     (M, 2) [m]: where the robots there can plan to."""
-    free = ~np.asarray(costmap.blocked)
+    free = ~np.asarray(blocked)
     labels, _ = ndi.label(free, structure=np.ones((3, 3), dtype=bool))
-    rc = costmap.grid.cell_of(np.asarray(xy_m, dtype=float).reshape(-1, 2))
+    rc = grid.cell_of(np.asarray(xy_m, dtype=float).reshape(-1, 2))
     h, w = free.shape
     lab = labels[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
     lab = lab[lab > 0]
     out: BoolArray = np.isin(labels, lab) if len(lab) else free
+    return out
+
+
+def _aim_spots(state: TacticsState, fire: int) -> FloatArray:
+    """The spots of a fire its fighters aim at: its flames when it has any, else all."""
+    k = state.knowledge
+    mine = k.spot_fire == fire
+    if (mine & k.spot_flame).any():
+        mine &= k.spot_flame
+    out: FloatArray = k.spot_xy_m[mine]
     return out
 
 
@@ -62,7 +72,16 @@ def fight_goals(
         if same and np.isfinite(goals[team, 0]).all():
             continue
         if reach is None:
-            reach = _reachable(state.nav.costmap, pose[:, :2])
+            # reachable without crossing the cells within fire_block_m of a spot
+            # (except round the robots: one near a fire can always leave)
+            blocked = np.array(state.nav.costmap.blocked)
+            if params.fire_block_m > 0.0:
+                spots = state.knowledge.spot_xy_m
+                grid = state.nav.costmap.grid
+                blocked |= _disc_mask(grid, spots, params.fire_block_m) & ~_disc_mask(
+                    grid, pose[:, :2], 1.0
+                )
+            reach = _reachable(blocked, state.nav.costmap.grid, pose[:, :2])
         radius = fext[j] + params.standoff_m
         goals[team] = ring_slots(
             state.coarse,
@@ -70,7 +89,7 @@ def fight_goals(
             fxy[j],
             radius,
             pose[team, :2],
-            spots_xy_m=state.knowledge.spot_xy_m[state.knowledge.spot_fire == fid],
+            spots_xy_m=_aim_spots(state, fid),
             reachable=reach,
             near_m=near_m,
             shot_m=shot_m,
@@ -100,8 +119,9 @@ def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArra
 def fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -> TacticsState:
     """The navigation costmap round the fires: ``fire_cost`` more per metre within
     ``fire_keepout_m`` of every burning spot (A* goes round a fire where it can), and
-    the cells within ``fire_block_m`` of one blocked, except within 1 m of a robot (so a
-    robot near a fire can always plan its way out)."""
+    ten times that within ``fire_block_m`` of one (paths cross there only where there
+    is no other way: a hard block trapped robots behind the spots a fire put at a door,
+    mission-office seed 2; the slots never lie there, :func:`fight_goals`)."""
     base = state.base_costmap
     spots = state.knowledge.spot_xy_m
     if len(spots) == 0:
@@ -111,13 +131,9 @@ def fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -
     grid = base.grid
     near = _disc_mask(grid, spots, params.fire_keepout_m)
     cost = np.where(near, base.cost + params.fire_cost, base.cost)
-    blocked = np.array(base.blocked)
     if params.fire_block_m > 0.0:
-        hot = _disc_mask(grid, spots, params.fire_block_m)
-        hot &= ~_disc_mask(grid, pose[:, :2], 1.0)
-        blocked |= hot
-        cost[hot] = np.inf
-    for arr in (cost, blocked):
-        arr.setflags(write=False)
-    costmap = Costmap(base.grid, base.clearance_m, blocked, cost, base.inflation_m)
+        hot = _disc_mask(grid, spots, params.fire_block_m) & ~base.blocked
+        cost[hot] += 10.0 * params.fire_cost
+    cost.setflags(write=False)
+    costmap = Costmap(base.grid, base.clearance_m, base.blocked, cost, base.inflation_m)
     return replace(state, nav=replace(state.nav, costmap=costmap))

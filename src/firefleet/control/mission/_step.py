@@ -218,7 +218,10 @@ def _orders(
         # aim at the burning spots in reach and in sight, where the cone holds the most
         # (a spot sprayed out is soon seen not burning and dropped: the aim sweeps on);
         # without one, face the fire's centre
-        spots = k.spot_xy_m[k.spot_fire == state.task_fire[i]]
+        mine = k.spot_fire == state.task_fire[i]
+        if (mine & k.spot_flame).any():  # flames seen: aim at them, not at the hot gas
+            mine &= k.spot_flame
+        spots = k.spot_xy_m[mine]
         d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
         near = np.flatnonzero(d <= params.spray_range_m)
         if len(near):
@@ -488,6 +491,7 @@ def tactics_step(
             looked,
             t,
             params,
+            None if obs.fire_peak_c is None else np.asarray(obs.fire_peak_c, dtype=float),
         )
         state = replace(
             state,

@@ -240,14 +240,17 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
     return tactics_init(_grid(scenario), scenario.initial_poses, tactics), params
 
 
-def _on_map(rows: FloatArray, pose: FloatArray, kind: int) -> tuple[FloatArray, np.ndarray]:
-    """Detections of one kind placed on the map by the robots' pose estimates."""
+def _on_map(
+    rows: FloatArray, pose: FloatArray, kind: int
+) -> tuple[FloatArray, np.ndarray, FloatArray]:
+    """Detections of one kind placed on the map by the robots' pose estimates: (K, 2)
+    positions, robots, peak readings [C]."""
     pick = rows[rows[:, 1] == kind]
     robot = pick[:, 0].astype(np.int64)
     heading = pose[robot, 2] + pick[:, 2]
     xy = pose[robot, :2] + pick[:, 3:4] * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
     ok = np.isfinite(xy).all(axis=1)
-    return xy[ok], robot[ok]
+    return xy[ok], robot[ok], pick[ok, 4]
 
 
 def mission_decide(
@@ -284,8 +287,8 @@ def mission_decide(
         zero = np.zeros((n, 2))
         return state, WheelCommand(reference_rad_s=zero, series={"tank_l": tank})
     rows = np.asarray(inputs.readings["thermal_detections"]).reshape(-1, 5)
-    fire_xy, fire_robot = _on_map(rows, pose, FIRE)
-    person_xy, person_robot = _on_map(rows, pose, PERSON)
+    fire_xy, fire_robot, fire_peak = _on_map(rows, pose, FIRE)
+    person_xy, person_robot, _ = _on_map(rows, pose, PERSON)
     damaged = np.asarray(inputs.readings["damaged"]) > 0.5
     ranges = {
         name: (inputs.readings[name], bearings)
@@ -305,6 +308,7 @@ def mission_decide(
         damaged=damaged,
         alive=~damaged,
         looked=looked,
+        fire_peak_c=fire_peak,
         air_c=np.asarray(inputs.readings["air_c"], dtype=float)
         if "air_c" in inputs.readings
         else None,
