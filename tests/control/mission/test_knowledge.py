@@ -266,3 +266,35 @@ def test_explored_fraction_equals_the_map_cells_count() -> None:
     s = replace(state, covered_coarse=covered)
     free = np.asarray(grid.free)
     assert s.explored_frac == pytest.approx((s.covered & free).sum() / free.sum(), abs=1e-12)
+
+
+def test_spots_read_at_flame_temperature_are_flames() -> None:
+    """A spot is flames once a detection reading flame_c or more put or refreshed it
+    (within half fire_merge_m); cooler readings (hot gas) never make it so."""
+    state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
+    pose = np.array([[1.0, 9.0, math.pi / 2]])  # looking at the wall: no looks count
+
+    def add(k: Knowledge, xy: list[float], peak_c: float) -> Knowledge:
+        out, _ = update_knowledge(
+            k,
+            state.coarse,
+            pose,
+            np.array([xy]),
+            np.zeros(1, dtype=np.int64),
+            NONE2,
+            NONE,
+            np.ones(1, bool),
+            0.0,
+            P,
+            np.array([peak_c]),
+        )
+        return out
+
+    k = add(empty_knowledge(), [6.0, 5.0], P.flame_c - 1.0)  # hot gas
+    k = add(k, [8.0, 5.0], P.flame_c)  # flames, a new spot of another fire
+    assert k.spot_flame.tolist() == [False, True]
+    k = add(k, [6.0 + 0.4 * P.fire_merge_m, 5.0], 450.0)  # refreshes the first spot
+    assert k.spot_flame.tolist() == [True, True]
+    assert len(k.spot_xy_m) == 2
+    k = add(k, [6.0 + 0.8 * P.fire_merge_m, 5.0], 100.0)  # joins it as a new, cool spot
+    assert k.spot_flame.tolist() == [True, True, False]
