@@ -238,14 +238,21 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
         # detector cannot call a standing person a person from much closer: the frame
         # cuts them); found when that position lies within 2 m of them (the world's test)
         confirm_radius_m=3.0,
+        # a fighter leaves air at two thirds of its rating (the hot layer can rise by
+        # tens of degrees in the seconds it takes to drive off)
+        retreat_c=2.0 / 3.0 * cmd.rating_c,
         # a fire never takes the whole team: one robot at least keeps searching for people
         fire_robots_max=max(1, min(6, scenario.n_robots - 1)),
         fire_robots_min=min(2, max(1, scenario.n_robots - 1)),
         # the lighter dynamic window (5 x 9 candidates over 8 steps, control.mission's
         # notes): four times cheaper than navigate's 9 x 21 x 15, and on mission-office
         # seed 0 the finer one left a victim unfound and two robots touching
+        # DWA's disc is the robot's plus the planner's margin (0.05 m): it avoids the
+        # teammates where their dead-reckoned estimates put them, a few cm off (mission-office
+        # seed 0: two robots touched at 0.293 m between centres with the bare radius)
         nav=NavigationParams(
-            robot_radius_m=cmd.robot_radius_m, dwa=DwaParams(n_v=5, n_omega=9, n_steps=8)
+            robot_radius_m=cmd.robot_radius_m,
+            dwa=DwaParams(n_v=5, n_omega=9, n_steps=8, robot_radius_m=cmd.robot_radius_m + 0.05),
         ),
     )
     bearings = reading_bearings(scenario)
@@ -258,14 +265,17 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
     return tactics_init(_grid(scenario), scenario.initial_poses, tactics), params
 
 
-def _on_map(rows: FloatArray, pose: FloatArray, kind: int) -> tuple[FloatArray, np.ndarray]:
-    """Detections of one kind placed on the map by the robots' pose estimates."""
+def _on_map(
+    rows: FloatArray, pose: FloatArray, kind: int
+) -> tuple[FloatArray, np.ndarray, FloatArray]:
+    """Detections of one kind placed on the map by the robots' pose estimates: (K, 2)
+    positions, robots, peak readings [C]."""
     pick = rows[rows[:, 1] == kind]
     robot = pick[:, 0].astype(np.int64)
     heading = pose[robot, 2] + pick[:, 2]
     xy = pose[robot, :2] + pick[:, 3:4] * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
     ok = np.isfinite(xy).all(axis=1)
-    return xy[ok], robot[ok]
+    return xy[ok], robot[ok], pick[ok, 4]
 
 
 def mission_decide(
@@ -305,8 +315,8 @@ def mission_decide(
         idle = {"mode": np.full(n, 4.0), "spray": np.zeros(n), "tank_l": tank}  # MODES[4]
         return state, WheelCommand(reference_rad_s=np.zeros((n, 2)), series=idle)
     rows = np.asarray(inputs.readings["thermal_detections"]).reshape(-1, 5)
-    fire_xy, fire_robot = _on_map(rows, pose, FIRE)
-    person_xy, person_robot = _on_map(rows, pose, PERSON)
+    fire_xy, fire_robot, fire_peak = _on_map(rows, pose, FIRE)
+    person_xy, person_robot, _ = _on_map(rows, pose, PERSON)
     damaged = np.asarray(inputs.readings["damaged"]) > 0.5
     ranges = {
         name: (inputs.readings[name], bearings)
@@ -326,6 +336,10 @@ def mission_decide(
         damaged=damaged,
         alive=~damaged,
         looked=looked,
+        fire_peak_c=fire_peak,
+        air_c=np.asarray(inputs.readings["air_c"], dtype=float)
+        if "air_c" in inputs.readings
+        else None,
     )
     state, orders = tactics_step(state, obs, params.tactics, dt_s)
     v = np.where(damaged, 0.0, orders.v_m_s)
