@@ -76,14 +76,20 @@ class FuelRegion:
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class FuelSpec:
-    """Relative fuel load of the open cells (1: an office's furnishings; walls 0)."""
+    """Relative fuel load of the open cells (1: an office's furnishings; walls 0), and
+    the fuel's relative smoke yield ``smoke_yield`` (1: the default smoke production,
+    :data:`firefleet.world.SMOKE`; foams and plastics yield about ten times the soot of
+    wood, Tewarson, SFPE Handbook, 3rd ed., 2002, section 3 ch. 4)."""
 
     default: float = 1.0
     regions: tuple[FuelRegion, ...] = ()
+    smoke_yield: float = 1.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.default) and self.default >= 0.0):
             raise InputError(f"world.fuel.default must be >= 0, got {self.default}")
+        if not (math.isfinite(self.smoke_yield) and self.smoke_yield >= 0.0):
+            raise InputError(f"world.fuel.smoke_yield must be >= 0, got {self.smoke_yield}")
 
 
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
@@ -164,6 +170,16 @@ class Mission:
         Step of the fire, heat, smoke and victims [s].
     record_s : float
         Recording period [s] (poses and the fields; about 1 Hz).
+    perception : {"thermal", "stereo"}
+        The team's eyes for people and fires: the thermal camera (``sensors.thermal``)
+        or, for a team without one, the stereo pair's visible-light camera, which the
+        smoke blinds (docs/mission.md, "Smoke and the stereo-only team").
+    stereo_team : bool
+        Also run a stereo-only team in the same world (map, fires, people, seed) and
+        report its ``stereo_victims_found`` and ``stereo_fires_detected``.
+    arrive_s : float
+        When the team enters [s]: until then the robots wait at their poses while the
+        fire burns (a fire brigade arrives minutes after the ignition).
 
     Examples
     --------
@@ -182,6 +198,9 @@ class Mission:
     robot_radius_m: float = 0.15
     world_step_s: float = 0.1
     record_s: float = 1.0
+    perception: Literal["thermal", "stereo"] = "thermal"
+    stereo_team: bool = False
+    arrive_s: float = 0.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -197,10 +216,15 @@ class Mission:
                 "world_step_s",
                 "record_s",
             ),
+            non_negative=("arrive_s",),
         )
 
     def check_team(self, n_robots: int, duration_s: float) -> None:
         """The record and world steps must fit the duration."""
+        if self.arrive_s >= duration_s:
+            raise InputError(
+                f"command.arrive_s {self.arrive_s:g} must be before duration_s {duration_s:g}"
+            )
         if self.record_s > duration_s:
             raise InputError(
                 f"command.record_s {self.record_s:g} is longer than duration_s {duration_s:g}"

@@ -269,7 +269,8 @@ def check_world(
             kind = "navigate" if navigate is not None else "mission"
             raise InputError(f"world.map: a {kind} command needs a map (world: {{map: office}})")
         return
-    if mission is not None and mission.robots and (sensors is None or sensors.thermal is None):
+    thermal = mission is not None and mission.robots and mission.perception == "thermal"
+    if thermal and (sensors is None or sensors.thermal is None):
         raise InputError(
             "sensors.thermal: a mission's robots find fires and people with their thermal "
             "cameras (sensors: {thermal: {}})"

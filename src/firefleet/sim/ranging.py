@@ -35,6 +35,20 @@ References
    15 degree measuring angle, 60 ms measurement cycle.
 .. [3] D. Gallup et al., "Variable baseline/resolution stereo", CVPR 2008 (stereo depth
    error grows with depth squared: ``dZ = Z^2 dd / (f B)``).
+.. [4] J. W. Starr, B. Y. Lattimer, "Evaluation of navigation sensors in fire smoke
+   environments", Fire Technology 50, 2014 (lidar and stereo vision degrade in dense
+   smoke; a thermal camera and radar see through it).
+
+**Smoke** (optional ``smoke=`` :class:`SmokeField`, default None: no smoke, the same
+ranges bit for bit): the lidar and the stereo scan see by visible or near-infrared
+light, which the smoke dims by Beer-Lambert's law along each ray
+(:mod:`._smoke_cast`). A ray whose optical depth reaches the sensor's limit
+(``SmokeField.lidar`` / ``.stereo``, :class:`SmokeOptics`: two-way transmittance at
+least 0.01 for the lidar, one-way contrast ``exp(-tau) >= exp(-3)`` for the stereo
+pair) before it reaches the wall is a dropout: it reads as a miss (``inf``), the rule
+of this model (no spurious return from the smoke itself). The ultrasonic ring takes no
+``smoke``: sound's wavelength (about 8 mm at 40 kHz) is long against soot particles
+(under a micrometre), which scatter it negligibly.
 """
 
 from __future__ import annotations
@@ -51,11 +65,14 @@ from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array
 from firefleet.sim._ranging_cast import cast_team, clearance_cells
 from firefleet.sim._ranging_params import LidarParams, StereoScanParams, UltrasonicParams
+from firefleet.sim._smoke_cast import SmokeField, SmokeOptics, smoke_reach_team
 from firefleet.world import OccupancyGrid
 
 __all__ = [
     "LidarParams",
     "RangeSensors",
+    "SmokeField",
+    "SmokeOptics",
     "StereoScanParams",
     "UltrasonicParams",
     "lidar_scan",
@@ -80,12 +97,18 @@ of a pure function of an immutable map, dropped with the map."""
 
 
 def _cast(
-    grid: OccupancyGrid, poses: FloatArray, bearings: FloatArray, max_range_m: float, radius: float
+    grid: OccupancyGrid,
+    poses: FloatArray,
+    bearings: FloatArray,
+    max_range_m: float,
+    radius: float,
+    smoke: SmokeField | None = None,
+    optics: SmokeOptics | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     clearance = _CLEARANCE.get(grid)
     if clearance is None:
         clearance = _CLEARANCE[grid] = clearance_cells(grid.occupied)
-    return cast_team(
+    r, cos_i = cast_team(
         grid.occupied,
         grid.resolution_m,
         grid.origin_m,
@@ -95,6 +118,10 @@ def _cast(
         radius,
         clearance,
     )
+    if smoke is not None and optics is not None:
+        blind = smoke_reach_team(smoke, poses, bearings, max_range_m, optics)
+        r = np.where(blind < r, np.inf, r)  # the smoke took the return: a dropout
+    return r, cos_i
 
 
 def lidar_scan(
@@ -104,6 +131,7 @@ def lidar_scan(
     *,
     robot_radius_m: float,
     rng: np.random.Generator,
+    smoke: SmokeField | None = None,
 ) -> FloatArray:
     """Lidar ranges of every robot: shape (N, B) [m], ``inf`` where nothing within range.
 
@@ -119,6 +147,9 @@ def lidar_scan(
         Radius of every robot's disc [m] (the others block the beams; 0: they do not).
     rng : numpy.random.Generator
         Draws the noise.
+    smoke : SmokeField, optional
+        Smoke dimming the beams (module notes); a beam it blinds before its return
+        reads ``inf``. None: clear air.
 
     Returns
     -------
@@ -139,7 +170,15 @@ def lidar_scan(
     [[inf, inf, 1.0, inf]]
     """
     p = _poses(poses)
-    r, _ = _cast(grid, p, params.bearings_rad, params.max_range_m, _radius(robot_radius_m))
+    r, _ = _cast(
+        grid,
+        p,
+        params.bearings_rad,
+        params.max_range_m,
+        _radius(robot_radius_m),
+        smoke,
+        None if smoke is None else smoke.lidar,
+    )
     if params.noise_m > 0.0:
         r = np.clip(r + params.noise_m * rng.standard_normal(r.shape), 0.0, params.max_range_m)
     return r
@@ -215,6 +254,7 @@ def stereo_scan(
     *,
     robot_radius_m: float,
     rng: np.random.Generator,
+    smoke: SmokeField | None = None,
 ) -> FloatArray:
     """The stereo pair's range scan of every robot: shape (N, S) [m], ``inf`` if empty.
 
@@ -233,6 +273,10 @@ def stereo_scan(
         Radius of every robot's disc [m].
     rng : numpy.random.Generator
         Draws the depth noise.
+    smoke : SmokeField, optional
+        Smoke dimming the scene (module notes); a ray it blinds before the obstacle
+        returns nothing, and a sector all of whose rays are blind reads ``inf``.
+        None: clear air.
 
     Returns
     -------
@@ -255,7 +299,15 @@ def stereo_scan(
     p = _poses(poses)
     n, s, m = p.shape[0], params.sectors, params.rays_per_sector
     bearings = params.ray_bearings_rad()
-    r, _ = _cast(grid, p, bearings.ravel(), params.max_range_m, _radius(robot_radius_m))
+    r, _ = _cast(
+        grid,
+        p,
+        bearings.ravel(),
+        params.max_range_m,
+        _radius(robot_radius_m),
+        smoke,
+        None if smoke is None else smoke.stereo,
+    )
     r = r.reshape(n, s, m)
     nearest = np.argmin(r, axis=2)[..., None]
     rng_s = np.take_along_axis(r, nearest, axis=2)[..., 0]
@@ -289,6 +341,9 @@ class RangeSensors:
         The loop's tick [s].
     rng : numpy.random.Generator
         Draws every sensor's noise.
+    smoke : callable, optional
+        ``smoke(world) -> SmokeField or None``: the smoke the lidar and the stereo scan
+        look through at this tick (module notes); None: clear air.
 
     Examples
     --------
@@ -316,6 +371,7 @@ class RangeSensors:
         *,
         dt_s: float = 0.01,
         rng: np.random.Generator,
+        smoke: Callable[[Any], SmokeField | None] | None = None,
     ) -> None:
         if not (math.isfinite(dt_s) and dt_s > 0.0):
             raise InputError(f"dt_s must be > 0, got {dt_s}")
@@ -323,6 +379,7 @@ class RangeSensors:
         self.robot_radius_m = _radius(robot_radius_m)
         self.dt_s = float(dt_s)
         self.rng = rng
+        self.smoke = smoke
         self.sensors: dict[str, Any] = {}
         if ultrasonic is not None:
             self.sensors["ultrasonic_range_m"] = ultrasonic
@@ -345,14 +402,18 @@ class RangeSensors:
             "lidar_range_m": lidar_scan,
             "stereo_scan_m": stereo_scan,
         }
-        for name, params in self.sensors.items():
-            if self._due(params) or name not in self._last:
-                self._last[name] = scans[name](
-                    self.grid,
-                    drive.pose,
-                    params,
-                    robot_radius_m=self.robot_radius_m,
-                    rng=self.rng,
-                )
+        due = [n for n, p in self.sensors.items() if self._due(p) or n not in self._last]
+        dimmed = self.smoke is not None and any(n != "ultrasonic_range_m" for n in due)
+        smoke = self.smoke(world) if self.smoke is not None and dimmed else None
+        for name in due:  # in the order the sensors were fitted: the noise draws too
+            seen = {} if smoke is None or name == "ultrasonic_range_m" else {"smoke": smoke}
+            self._last[name] = scans[name](
+                self.grid,
+                drive.pose,
+                self.sensors[name],
+                robot_radius_m=self.robot_radius_m,
+                rng=self.rng,
+                **seen,
+            )
         self._tick += 1
         return dict(self._last)

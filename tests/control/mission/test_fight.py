@@ -160,3 +160,71 @@ def test_a_third_of_the_team_keeps_exploring_while_floor_is_unsearched() -> None
         assert world.state.explored_frac < 0.9
         assert int((world.state.task_fire >= 0).sum()) == fighters
         assert int((world.state.mode == EXPLORE).sum()) == 3 - fighters
+
+
+def test_tanks_fill_only_by_the_refill_point() -> None:
+    """Two fighters on a fire of two spots, small tanks: each tank rises only while its
+    robot stands within refill_radius_m of the refill point (checked on every logged
+    tick), and both go and refill."""
+    p = TacticsParams(
+        nav=FAST_NAV,
+        fire_robots_min=2,
+        fire_robots_max=2,
+        sensing_range_m=6.0,
+        explore_frac=0.0,
+        tank_l=4.0,
+        flow_l_s=0.5,
+        refill_l_s=2.0,
+        refill_xy_m=(1.5, 2.0),
+    )
+    fire = np.array([[7.0, 5.0], [7.5, 5.5]])
+    start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0]])
+    world = World(room(), p, start, fire_xy=fire, water_l=1e9)
+    world.run(90.0)
+    tank = np.array([e["tank"] for e in world.log])
+    pose = np.array([e["pose"] for e in world.log])
+    rose = np.diff(tank, axis=0) > 1e-9
+    near = np.hypot(pose[:-1, :, 0] - 1.5, pose[:-1, :, 1] - 2.0) <= p.refill_radius_m + 0.05
+    assert rose.any(axis=0).all(), "a robot never refilled"
+    assert np.all(near[rose]), "a tank rose away from the refill point"
+
+
+def test_a_fighter_in_hot_air_gets_a_slot_standoff_from_there() -> None:
+    """A fighter whose air reaches retreat_c marks its place hot; the plan after gives
+    it a slot at least standoff_m from that place and still within the nozzle's reach
+    of the fire (distances on the plane)."""
+    from firefleet.control.mission import TacticsObservation, tactics_init, tactics_step
+
+    p = TacticsParams(nav=FAST_NAV, fire_robots_min=1, fire_robots_max=1, explore_frac=0.0)
+    pose = np.array([[4.2, 5.0, 0.0]])  # 1.8 m from the fire, facing it
+    state = tactics_init(room(), pose, p)
+
+    def obs(t: float, air: float) -> TacticsObservation:
+        return TacticsObservation(
+            t_s=t,
+            pose_m=pose,
+            fire_xy_m=FIRE,
+            fire_robot=np.zeros(1, int),
+            person_xy_m=np.zeros((0, 2)),
+            person_robot=np.zeros(0, int),
+            ranges={},
+            tank_l=np.full(1, 20.0),
+            damaged=np.zeros(1, bool),
+            alive=np.ones(1, bool),
+            air_c=np.full(1, air),
+            fire_peak_c=np.full(1, 450.0),
+        )
+
+    t = 0.0
+    for _ in range(30):
+        state, orders = tactics_step(state, obs(t, 40.0), p, 0.1)
+        t += 0.1
+    assert MODES[orders.mode[0]] == "fight"
+    assert len(state.hot_xy_m) == 0
+    for _ in range(20):
+        state, orders = tactics_step(state, obs(t, p.retreat_c + 5.0), p, 0.1)
+        t += 0.1
+    assert np.allclose(state.hot_xy_m, pose[:, :2])
+    goal = state.goal_xy_m[0]
+    assert np.hypot(*(goal - pose[0, :2])) >= p.standoff_m - 1e-9, goal
+    assert np.hypot(*(goal - FIRE[0])) <= p.spray_range_m, goal

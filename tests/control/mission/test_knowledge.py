@@ -231,7 +231,7 @@ def test_a_victim_looked_at_without_a_person_is_dismissed_until_seen_again() -> 
 def test_paths_go_round_a_known_fire() -> None:
     from dataclasses import replace
 
-    from firefleet.control.mission._step import _fire_costmap
+    from firefleet.control.mission._fight import fire_costmap
     from firefleet.control.navigation import astar
 
     state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
@@ -240,17 +240,17 @@ def test_paths_go_round_a_known_fire() -> None:
     plain = astar(state.nav.costmap, start, goal).xy_m
     assert plain is not None
     assert np.hypot(*(plain - [6.0, 5.0]).T).min() < 0.1  # straight through it
-    hot = _fire_costmap(replace(state, knowledge=k), np.array([[2.0, 5.0, 0.0]]), P).nav.costmap
+    hot = fire_costmap(replace(state, knowledge=k), np.array([[2.0, 5.0, 0.0]]), P).nav.costmap
     around = astar(hot, start, goal).xy_m
     assert around is not None
     assert np.hypot(*(around - [6.0, 5.0]).T).min() >= P.fire_keepout_m - 0.05
-    # blocked within fire_block_m of it, but not round a robot: one standing 0.5 m
-    # from the fire can still plan its way out
+    # within fire_block_m of it: 1 + 11 fire_cost per metre (never blocked: a robot
+    # standing 0.5 m from the fire can always plan its way out)
     grid = hot.grid
-    assert hot.blocked[tuple(grid.cell_of([6.0, 5.6]))]
-    near = _fire_costmap(replace(state, knowledge=k), np.array([[6.5, 5.0, 0.0]]), P)
-    assert not near.nav.costmap.blocked[tuple(grid.cell_of([6.5, 5.0]))]
-    out = astar(near.nav.costmap, np.array([6.5, 5.0]), goal)
+    rc = tuple(grid.cell_of([6.0, 5.6]))
+    assert not hot.blocked[rc]
+    assert hot.cost[rc] == pytest.approx(state.nav.costmap.cost[rc] + 11 * P.fire_cost)
+    out = astar(hot, np.array([6.5, 5.0]), goal)
     assert out.found
 
 
@@ -266,3 +266,35 @@ def test_explored_fraction_equals_the_map_cells_count() -> None:
     s = replace(state, covered_coarse=covered)
     free = np.asarray(grid.free)
     assert s.explored_frac == pytest.approx((s.covered & free).sum() / free.sum(), abs=1e-12)
+
+
+def test_spots_read_at_flame_temperature_are_flames() -> None:
+    """A spot is flames once a detection reading flame_c or more put or refreshed it
+    (within half fire_merge_m); cooler readings (hot gas) never make it so."""
+    state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
+    pose = np.array([[1.0, 9.0, math.pi / 2]])  # looking at the wall: no looks count
+
+    def add(k: Knowledge, xy: list[float], peak_c: float) -> Knowledge:
+        out, _ = update_knowledge(
+            k,
+            state.coarse,
+            pose,
+            np.array([xy]),
+            np.zeros(1, dtype=np.int64),
+            NONE2,
+            NONE,
+            np.ones(1, bool),
+            0.0,
+            P,
+            np.array([peak_c]),
+        )
+        return out
+
+    k = add(empty_knowledge(), [6.0, 5.0], P.flame_c - 1.0)  # hot gas
+    k = add(k, [8.0, 5.0], P.flame_c)  # flames, a new spot of another fire
+    assert k.spot_flame.tolist() == [False, True]
+    k = add(k, [6.0 + 0.4 * P.fire_merge_m, 5.0], 450.0)  # refreshes the first spot
+    assert k.spot_flame.tolist() == [True, True]
+    assert len(k.spot_xy_m) == 2
+    k = add(k, [6.0 + 0.8 * P.fire_merge_m, 5.0], 100.0)  # joins it as a new, cool spot
+    assert k.spot_flame.tolist() == [True, True, False]

@@ -31,13 +31,20 @@ What the team does (:mod:`._plan`):
   detection or a robot's state changes (no more often than ``replan_s``);
 - *exploration*: the robots left free go to frontiers of the coverage (Yamauchi 1997)
   chosen with Burgard et al.'s (2005) utility, never two on one frontier;
-- *fighting* (:mod:`._ring`): a fire's robots take slots on a ring of radius extent +
-  ``standoff_m`` at the regular formation law's spacing (the fire as the virtual
-  leader: ``control.formation``'s law relaxed to its equilibrium), assigned by the
-  Hungarian method, then turn to the fire and spray while a burning spot is within
-  ``spray_range_m`` and in sight;
-- *refill*: an empty tank sends its robot to a spot by the refill point; full again, it
-  rejoins the allocation (its fire, if it still burns);
+- *fighting* (:mod:`._ring`, :mod:`._fight`): a fire's robots take slots on a ring of
+  radius extent + ``standoff_m`` at the regular formation law's spacing (the fire as the
+  virtual leader: ``control.formation``'s law relaxed to its equilibrium), assigned by
+  the Hungarian method. A slot must be open, reachable (on the costmap that blocks the
+  burning spots' surroundings) and have a shot: a burning spot between
+  ``fire_block_m + 0.25`` and ``spray_range_m - 0.5`` away in line of sight; the
+  polygon turns to make the most slots so, a slot still without moves along its ray,
+  else to the nearest cell with a shot clear of the other slots. An arrived fighter
+  turns to the nearest burning spot in reach and in sight and sprays (a spot sprayed
+  out is soon seen not burning and dropped, so the aim sweeps on); one that stands
+  ``reslot_s`` without a shot gets a new slot;
+- *refill*: an empty tank sends its robot to a spot by the refill point (so does a
+  tank below ``low_tank_frac`` of a robot off the fires while a fire burns); full
+  again, it rejoins the allocation (its fire, if it still burns);
 - *damage*: a damaged or dead robot stops, is dropped, and the team re-plans;
 - *safety*: paths cost ``fire_cost`` more per metre within ``fire_keepout_m`` of a
   burning spot (A* goes round a fire where it can); a victim looked at

@@ -40,6 +40,9 @@ class Knowledge:
         Burning spots [m].
     spot_fire : ndarray of int, shape (S,)
         The fire (a stable id) of each spot.
+    spot_flame : ndarray of bool, shape (S,)
+        Whether a detection reading ``flame_c`` or more put or kept each spot (flames,
+        not the hot gas a fire pushes ahead of it).
     spot_misses : ndarray of int, shape (S,)
         Looks in a row that saw no fire at each spot.
     next_fire : int
@@ -60,6 +63,7 @@ class Knowledge:
 
     spot_xy_m: FloatArray
     spot_fire: IntArray
+    spot_flame: BoolArray
     spot_misses: IntArray
     next_fire: int
     victim_xy_m: FloatArray
@@ -85,6 +89,7 @@ def empty_knowledge() -> Knowledge:
     return Knowledge(
         spot_xy_m=np.zeros((0, 2)),
         spot_fire=np.zeros(0, dtype=np.int64),
+        spot_flame=np.zeros(0, dtype=bool),
         spot_misses=np.zeros(0, dtype=np.int64),
         next_fire=0,
         victim_xy_m=np.zeros((0, 2)),
@@ -114,7 +119,9 @@ def fires_of(k: Knowledge) -> tuple[IntArray, FloatArray, FloatArray]:
     return ids.astype(np.int64), xy, extent
 
 
-def _add_fire(k: Knowledge, p: FloatArray, merge_m: float) -> tuple[Knowledge, bool]:
+def _add_fire(
+    k: Knowledge, p: FloatArray, merge_m: float, flame: bool = False
+) -> tuple[Knowledge, bool]:
     """One fire detection into the spots; True when the set of fires changed."""
     if len(k.spot_xy_m):
         d = np.hypot(k.spot_xy_m[:, 0] - p[0], k.spot_xy_m[:, 1] - p[1])
@@ -130,18 +137,23 @@ def _add_fire(k: Knowledge, p: FloatArray, merge_m: float) -> tuple[Knowledge, b
             spot_fire = np.where(np.isin(spot_fire, touched), fire, spot_fire)
         misses = k.spot_misses.copy()
         misses[d <= 0.5 * merge_m] = 0
+        flames = k.spot_flame | (flame & (d <= 0.5 * merge_m))
         if d.min() > 0.5 * merge_m:  # a new spot of that fire
             return replace(
                 k,
                 spot_xy_m=np.vstack([k.spot_xy_m, p[None]]),
                 spot_fire=np.append(spot_fire, fire),
+                spot_flame=np.append(flames, flame),
                 spot_misses=np.append(misses, 0),
-            ), len(touched) > 1
-        return replace(k, spot_fire=spot_fire, spot_misses=misses), len(touched) > 1
+            ), len(touched) > 1 or (flame and not k.spot_flame.any())
+        return replace(k, spot_fire=spot_fire, spot_flame=flames, spot_misses=misses), len(
+            touched
+        ) > 1 or bool(flames.sum() > k.spot_flame.sum() and not k.spot_flame.any())
     return replace(
         k,
         spot_xy_m=np.vstack([k.spot_xy_m, p[None]]),
         spot_fire=np.append(k.spot_fire, k.next_fire),
+        spot_flame=np.append(k.spot_flame, flame),
         spot_misses=np.append(k.spot_misses, 0),
         next_fire=k.next_fire + 1,
     ), True
@@ -199,6 +211,7 @@ def update_knowledge(
     looked: BoolArray,
     t_s: float,
     params: TacticsParams,
+    fire_peak_c: FloatArray | None = None,
 ) -> tuple[Knowledge, bool]:
     """This tick's detections and looks into the knowledge (module notes).
 
@@ -217,6 +230,8 @@ def update_knowledge(
         Robots (working) whose thermal frame was read this tick.
     t_s : float
     params : TacticsParams
+    fire_peak_c : ndarray, shape (K,), optional
+        Each fire detection's peak reading [C] (``flame_c`` or more: flames).
 
     Returns
     -------
@@ -225,8 +240,11 @@ def update_knowledge(
         A fire or a victim appeared, merged, went out or was confirmed.
     """
     changed = False
-    for p in fire_xy:
-        k, c = _add_fire(k, p, params.fire_merge_m)
+    flames = (
+        np.zeros(len(fire_xy), dtype=bool) if fire_peak_c is None else fire_peak_c >= params.flame_c
+    )
+    for p, f in zip(fire_xy, flames, strict=True):
+        k, c = _add_fire(k, p, params.fire_merge_m, bool(f))
         changed |= c
     for p, r in zip(person_xy, person_robot, strict=True):
         k, c = _add_person(k, p, pose[int(r), :2], t_s, params)
@@ -257,6 +275,7 @@ def update_knowledge(
                     k,
                     spot_xy_m=spots[keep],
                     spot_fire=k.spot_fire[keep],
+                    spot_flame=k.spot_flame[keep],
                     spot_misses=misses[keep],
                 )
                 changed |= len(np.unique(k.spot_fire)) != before

@@ -78,8 +78,21 @@ class TacticsParams:
     fire_cost : float
         Extra planning cost per metre there (the map's free cells cost 1 per metre).
     fire_block_m : float
-        Paths never pass within this distance of a burning spot [m] (0: none), except
-        within 1 m of a robot (it can always leave).
+        Paths cost ten times ``fire_cost`` more per metre within this distance of a
+        burning spot, and slots must be reachable without crossing there [m] (0: none).
+    reslot_s : float
+        A fighter standing at its slot this long without a burning spot in reach and
+        in sight gets a new slot [s].
+    flame_c : float
+        A fire detection whose peak reads this or more is flames [C]: the fighters aim
+        at such spots when their fire has any. Flames (800 C) saturate the Lepton's
+        high-gain range (about 450 C); the hot gas a fire pushes out of its room reads
+        less. On mission-office seeds 0-2 (runs of this code before the threshold)
+        93-96 % of the detections reading 300 C or more lay within 1 m of a burning
+        cell; of those lying 1 m or more from every burning cell, 4-15 % read that.
+    retreat_c : float
+        A fighter in air this hot leaves its place: the place joins the team's hot
+        places, which slots keep ``standoff_m`` from [C] (a robot's rating is higher).
     robot_per_fire_m : float
         A fire needs one robot more per this many metres of its extent's radius.
     fire_robots_min, fire_robots_max : int
@@ -143,6 +156,9 @@ class TacticsParams:
     fire_keepout_m: float = 1.5
     fire_cost: float = 20.0
     fire_block_m: float = 0.75
+    reslot_s: float = 4.0
+    retreat_c: float = 200.0
+    flame_c: float = 300.0
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -180,6 +196,9 @@ class TacticsParams:
                 "fire_merge_m",
                 "victim_merge_m",
                 "robot_per_fire_m",
+                "reslot_s",
+                "retreat_c",
+                "flame_c",
                 "replan_s",
                 "explore_replan_s",
                 "coverage_period_s",
@@ -254,6 +273,11 @@ class TacticsObservation:
         Robots whose thermal frame was taken (and run through the detector) this tick;
         ``None``: every robot's. Only a look that sees no fire where a fire is believed
         counts against it.
+    air_c : ndarray, shape (N,) or None
+        Air temperature at each robot (its PT100) [C]; ``None``: not measured.
+    fire_peak_c : ndarray, shape (K,) or None
+        Each fire detection's peak reading [C]; ``None``: not given (no spot counts as
+        flames; the fighters aim at every spot).
     """
 
     t_s: float
@@ -267,6 +291,8 @@ class TacticsObservation:
     damaged: BoolArray
     alive: BoolArray
     looked: BoolArray | None = None
+    air_c: FloatArray | None = None
+    fire_peak_c: FloatArray | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -5,7 +5,8 @@ are the believed fires (fire ``f`` needs ``k_f = clip(fire_robots_min + floor(ex
 robot_per_fire_m), fire_robots_min, fire_robots_max)`` robots) and the victims not yet
 confirmed (one robot each). Robot ``i``'s cost of task ``j`` is its travel distance on
 the map to the task (Dijkstra on the coarse grid from the task, :mod:`._coverage`),
-plus ``low_tank_penalty_m`` for a fire when its tank is below ``low_tank_frac``, minus
+plus ``low_tank_penalty_m`` for a fire other than its own when its tank is below
+``low_tank_frac`` (a fighter empties its tank on its fire), minus
 ``keep_bonus_m`` for the task it already has (so that a robot does not swap tasks for a
 metre's gain); a fire is impossible (``inf``) for an empty tank, every task for a robot
 damaged, dead or refilling. The assignment minimises the summed cost.
@@ -110,10 +111,12 @@ def allocate(
     cost = np.array(dist_m, dtype=float)
     low = tank_l < params.low_tank_frac * params.tank_l
     empty = tank_l <= _empty_l(params)
-    cost[np.ix_(low, is_fire)] += params.low_tank_penalty_m
-    cost[np.ix_(empty, is_fire)] = np.inf
     has = current >= 0
     rows = np.flatnonzero(has)
+    keep = np.zeros(cost.shape, dtype=bool)
+    keep[rows, current[has]] = True  # a fighter empties its tank on its fire
+    cost[low[:, None] & is_fire[None, :] & ~keep] += params.low_tank_penalty_m
+    cost[np.ix_(empty, is_fire)] = np.inf
     cost[rows, current[has]] = np.maximum(cost[rows, current[has]] - params.keep_bonus_m, 0.0)
     cost[~available] = np.inf
     return allocate_tasks(cost, demand=demand)

@@ -92,13 +92,56 @@ def regular_ring(
     return out
 
 
-def _valid(cm: CoarseMap, costmap: Costmap, center: FloatArray, pts: FloatArray) -> BoolArray:
+def has_shot(
+    cm: CoarseMap, pts: FloatArray, spots: FloatArray, near_m: float, reach_m: float
+) -> BoolArray:
+    """Whether a nozzle at each point (P, 2) has a burning spot (S, 2) at a distance in
+    ``[near_m, reach_m]`` in line of sight [m]: a shot at the fire, from no closer than
+    is safe."""
+    p = np.asarray(pts, dtype=float).reshape(-1, 2)
+    s = np.asarray(spots, dtype=float).reshape(-1, 2)
+    out = np.zeros(len(p), dtype=bool)
+    if len(p) == 0 or len(s) == 0:
+        return out
+    d = np.hypot(p[:, None, 0] - s[None, :, 0], p[:, None, 1] - s[None, :, 1])
+    pi, si = np.nonzero((d >= near_m) & (d <= reach_m))
+    if len(pi):
+        ok = line_of_sight(cm, p[pi], s[si])
+        out[pi[ok]] = True
+    return out
+
+
+def _clear(pts: FloatArray, others: FloatArray, dist_m: float) -> BoolArray:
+    """Points (P, 2) at least ``dist_m`` from every one of ``others`` (K, 2)."""
+    if len(others) == 0 or len(pts) == 0:
+        return np.ones(len(pts), dtype=bool)
+    d = np.hypot(pts[:, None, 0] - others[None, :, 0], pts[:, None, 1] - others[None, :, 1])
+    out: BoolArray = d.min(axis=1) >= dist_m
+    return out
+
+
+def _valid(
+    cm: CoarseMap,
+    costmap: Costmap,
+    reachable: BoolArray,
+    spots: FloatArray,
+    near_m: float,
+    shot_m: float,
+    pts: FloatArray,
+    avoid: FloatArray,
+    avoid_m: float,
+) -> BoolArray:
+    """Slots a robot may stand on (open, ``near_m`` from every spot and ``avoid_m`` from
+    every hot place), can get to (``reachable``, on the map grid) and spray the fire
+    from (:func:`has_shot`)."""
     grid = costmap.grid
     inside = grid.contains(pts)
     rc = grid.cell_of(pts)
     h, w = grid.shape
-    open_ = inside & ~costmap.blocked[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
-    out: BoolArray = open_ & line_of_sight(cm, pts, np.broadcast_to(center, pts.shape))
+    r, c = np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)
+    open_ = inside & ~costmap.blocked[r, c] & reachable[r, c]
+    open_ &= _clear(pts, spots, near_m) & _clear(pts, avoid, avoid_m)
+    out: BoolArray = open_ & has_shot(cm, pts, spots, near_m, shot_m)
     return out
 
 
@@ -107,25 +150,48 @@ def ring_slots(
     costmap: Costmap,
     center_xy_m: FloatArray,
     radius_m: float,
-    reach_m: float,
     robots_xy_m: FloatArray,
+    *,
+    spots_xy_m: FloatArray | None = None,
+    reachable: BoolArray | None = None,
+    near_m: float = 0.0,
+    shot_m: float = math.inf,
+    gap_m: float = 0.0,
+    avoid_xy_m: FloatArray | None = None,
+    avoid_m: float = 0.0,
 ) -> FloatArray:
     """Each robot's slot on the ring about a fire (module notes).
+
+    A slot is valid when it is open, reachable and has a shot: a burning spot at a
+    distance in ``[near_m, shot_m]`` in line of sight. The regular polygon turns to put
+    the most slots on valid spots; a slot still invalid moves along its ray to the
+    nearest valid radius, else to the nearest valid coarse cell at least ``gap_m`` from
+    every other slot (the spacing is then regular only where the walls allow).
 
     Parameters
     ----------
     cm : CoarseMap
-        For the lines of sight.
+        For the lines of sight and the candidate cells.
     costmap : Costmap
         Where a robot may stand.
     center_xy_m : ndarray, shape (2,)
         The fire [m].
     radius_m : float
         The ring's radius [m].
-    reach_m : float
-        Farthest a slot may move out along its ray when its own spot is in a wall [m].
     robots_xy_m : ndarray, shape (M, 2)
         The robots assigned to the fire [m].
+    spots_xy_m : ndarray, shape (S, 2), optional
+        The fire's burning spots [m] (default: its centre).
+    reachable : ndarray of bool, shape (H, W), optional
+        Map cells the robots can get to (default: every open cell).
+    near_m, shot_m : float
+        Nearest and farthest a slot's shot may be [m].
+    gap_m : float
+        Least distance between two slots moved off the ring [m].
+    avoid_xy_m : ndarray, shape (K, 2), optional
+        Places too hot to stand (where a robot's air reached its retreat temperature).
+    avoid_m : float
+        Least distance of a slot from them [m].
 
     Returns
     -------
@@ -134,6 +200,14 @@ def ring_slots(
     """
     c = np.asarray(center_xy_m, dtype=float)
     robots = np.asarray(robots_xy_m, dtype=float).reshape(-1, 2)
+    spots = c[None] if spots_xy_m is None else np.asarray(spots_xy_m, dtype=float).reshape(-1, 2)
+    reach = np.ones(costmap.grid.shape, dtype=bool) if reachable is None else reachable
+
+    avoid = np.zeros((0, 2)) if avoid_xy_m is None else np.asarray(avoid_xy_m).reshape(-1, 2)
+
+    def valid(pts: FloatArray) -> BoolArray:
+        return _valid(cm, costmap, reach, spots, near_m, shot_m, pts, avoid, avoid_m)
+
     m = len(robots)
     ring = regular_ring(c, radius_m, robots)
     d = ring - c
@@ -146,22 +220,42 @@ def ring_slots(
         delta = delta if delta <= period / 2 else delta - period
         ang = base + delta
         pts = c + radius_m * np.stack([np.cos(ang), np.sin(ang)], axis=1)
-        score = _valid(cm, costmap, c, pts).sum() - abs(delta) * 1e-3
+        score = valid(pts).sum() - abs(delta) * 1e-3
         if score > best_score:
             best, best_score = pts, score
     slots = best.copy()
-    bad = ~_valid(cm, costmap, c, slots)
+    bad = ~valid(slots)
     lo = costmap.inflation_m + 0.2
     radii = np.concatenate(
-        [np.arange(radius_m - 0.1, lo, -0.1), np.arange(radius_m + 0.1, reach_m, 0.1)]
+        [np.arange(radius_m - 0.1, lo, -0.1), np.arange(radius_m + 0.1, radius_m + 1.5, 0.1)]
     )
     radii = radii[np.argsort(np.abs(radii - radius_m), kind="stable")]
     for i in map(int, np.flatnonzero(bad)):
         u = (slots[i] - c) / radius_m
         cand = c + radii[:, None] * u
-        ok = _valid(cm, costmap, c, cand)
+        ok = valid(cand)
         if ok.any():
             slots[i] = cand[int(np.argmax(ok))]
+            bad[i] = False
+    if bad.any():
+        # off the ring: the nearest cell with a shot, clear of the other slots
+        cells = np.argwhere(cm.standable)
+        xy = cm.goal_xy(cells)
+        ds = np.hypot(xy[:, None, 0] - spots[None, :, 0], xy[:, None, 1] - spots[None, :, 1])
+        xy = xy[np.any((ds >= near_m) & (ds <= shot_m), axis=1)]
+        xy = xy[valid(xy)]
+        for i in map(int, np.flatnonzero(bad)):
+            others = slots[~bad]
+            if len(others):
+                gap = np.hypot(
+                    xy[:, None, 0] - others[None, :, 0], xy[:, None, 1] - others[None, :, 1]
+                )
+                cand = xy[gap.min(axis=1) >= gap_m]
+            else:
+                cand = xy
+            if len(cand):
+                slots[i] = cand[int(np.argmin(np.hypot(*(cand - slots[i]).T)))]
+                bad[i] = False
     cost = np.hypot(robots[:, None, 0] - slots[None, :, 0], robots[:, None, 1] - slots[None, :, 1])
     pick = allocate_tasks(cost)
     out: FloatArray = slots[pick]

@@ -7,8 +7,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from firefleet._typing import BoolArray, FloatArray, IntArray
+from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.mission._coverage import cone_coverage, line_of_sight
+from firefleet.control.mission._fight import fight_goals, fire_costmap
 from firefleet.control.mission._knowledge import fires_of, update_knowledge
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -29,16 +30,13 @@ from firefleet.control.mission._plan import (
     probe,
     task_distances,
 )
-from firefleet.control.mission._ring import ring_slots
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.navigation import (
-    Costmap,
     NavigationInputs,
     navigation_retarget,
     navigation_step,
 )
 from firefleet.errors import InputError, as_float_array
-from firefleet.world import OccupancyGrid
 
 __all__ = ["tactics_step"]
 
@@ -81,73 +79,6 @@ def _retarget(state: TacticsState, goals: FloatArray, pose: FloatArray) -> Tacti
     return replace(state, nav=nav, goal_xy_m=goals, closest_m=closest, closest_s=since)
 
 
-def _fight_goals(
-    state: TacticsState,
-    pose: FloatArray,
-    task_fire: IntArray,
-    old_fire: IntArray,
-    goals: FloatArray,
-    params: TacticsParams,
-) -> None:
-    """Ring slots of every fought fire into ``goals`` (kept while its team is unchanged)."""
-    ids, fxy, fext = fires_of(state.knowledge)
-    for j, fid in enumerate(ids):
-        team = np.flatnonzero(task_fire == fid)
-        if len(team) == 0:
-            continue
-        same = np.all(old_fire[team] == fid) and np.sum(old_fire == fid) == len(team)
-        if same and np.isfinite(goals[team, 0]).all():
-            continue
-        radius = fext[j] + params.standoff_m
-        reach = fext[j] + params.spray_range_m
-        goals[team] = ring_slots(
-            state.coarse, state.nav.costmap, fxy[j], radius, reach, pose[team, :2]
-        )
-
-
-def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArray:
-    """Map cells whose centres lie within ``radius_m`` of any point ``xy`` (M, 2)."""
-    grid_shape = grid.shape
-    h, w = grid_shape
-    k = math.ceil(radius_m / grid.resolution_m) + 1
-    out = np.zeros(grid_shape, dtype=bool)
-    for p in xy:
-        r, c = (int(v) for v in grid.cell_of(p))
-        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
-        if r0 >= r1 or c0 >= c1:
-            continue
-        rr, cc = np.mgrid[r0:r1, c0:c1]
-        centres = grid.center_of(np.stack([rr, cc], axis=-1))
-        out[r0:r1, c0:c1] |= np.hypot(centres[..., 0] - p[0], centres[..., 1] - p[1]) <= radius_m
-    return out
-
-
-def _fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -> TacticsState:
-    """The navigation costmap round the fires: ``fire_cost`` more per metre within
-    ``fire_keepout_m`` of every burning spot (A* goes round a fire where it can), and
-    the cells within ``fire_block_m`` of one blocked, except within 1 m of a robot (so a
-    robot near a fire can always plan its way out)."""
-    base = state.base_costmap
-    spots = state.knowledge.spot_xy_m
-    if len(spots) == 0:
-        if state.nav.costmap is base:
-            return state
-        return replace(state, nav=replace(state.nav, costmap=base))
-    grid = base.grid
-    near = _disc_mask(grid, spots, params.fire_keepout_m)
-    cost = np.where(near, base.cost + params.fire_cost, base.cost)
-    blocked = np.array(base.blocked)
-    if params.fire_block_m > 0.0:
-        hot = _disc_mask(grid, spots, params.fire_block_m)
-        hot &= ~_disc_mask(grid, pose[:, :2], 1.0)
-        blocked |= hot
-        cost[hot] = np.inf
-    for arr in (cost, blocked):
-        arr.setflags(write=False)
-    costmap = Costmap(base.grid, base.clearance_m, blocked, cost, base.inflation_m)
-    return replace(state, nav=replace(state.nav, costmap=costmap))
-
-
 def _plan(
     state: TacticsState,
     pose: FloatArray,
@@ -156,7 +87,7 @@ def _plan(
     params: TacticsParams,
 ) -> TacticsState:
     """Allocate fires and victims, then frontiers to the robots left (``_plan`` notes)."""
-    state = _fire_costmap(state, pose, params)
+    state = fire_costmap(state, pose, params)
     n = len(pose)
     k = state.knowledge
     ids, fxy, fext = fires_of(k)
@@ -197,7 +128,7 @@ def _plan(
     # fires: the ring
     fight = task_fire >= 0
     goals[fight & (state.task_fire != task_fire)] = np.nan
-    _fight_goals(state, pose, task_fire, state.task_fire, goals, params)
+    fight_goals(state, pose, task_fire, state.task_fire, goals, params)
     mode[fight] = FIGHT
     # victims: within half the confirmation radius, on the robot's side
     for i in map(int, np.flatnonzero(task_victim >= 0)):
@@ -263,37 +194,70 @@ def _orders(
     # a fighter or confirmer that has come no closer to its spot in stall_s settles
     # where it is (navigation told it has arrived, so that no teammate waits for it)
     # (a refiller too, if that is within refill_radius_m of its spot)
-    d = np.hypot(pose[:, 0] - state.goal_xy_m[:, 0], pose[:, 1] - state.goal_xy_m[:, 1])
+    d_goal = np.hypot(pose[:, 0] - state.goal_xy_m[:, 0], pose[:, 1] - state.goal_xy_m[:, 1])
     settle = (
-        ((mode == FIGHT) | (mode == CONFIRM) | ((mode == REFILL) & (d <= params.refill_radius_m)))
+        (
+            (mode == FIGHT)
+            | (mode == CONFIRM)
+            | ((mode == REFILL) & (d_goal <= params.refill_radius_m))
+        )
         & ~at_goal
         & (obs.t_s - state.closest_s >= params.stall_s)
     )
-    if settle.any():
-        nav = navigation_retarget(nav, pose[:, :2], settle)
-        at_goal = at_goal | settle
     w_max = params.nav.dwa.omega_max_rad_s
     spray = np.zeros(n, dtype=bool)
     ids, fxy, _ = fires_of(state.knowledge)
     k = state.knowledge
+    shot_s = np.where((mode == FIGHT) & at_goal, state.shot_s, obs.t_s)
+    goals = state.goal_xy_m
+    half = params.spray_half_angle_rad
     for i in map(int, np.flatnonzero(mode == FIGHT)):
         j = np.flatnonzero(ids == state.task_fire[i])
         if len(j) == 0:
             continue
-        c = fxy[int(j[0])]
-        spots = k.spot_xy_m[k.spot_fire == state.task_fire[i]]
-        err = float(_wrap(np.arctan2(c[1] - pose[i, 1], c[0] - pose[i, 0]) - pose[i, 2]))
-        if at_goal[i]:
+        # aim at the burning spots in reach and in sight, where the cone holds the most
+        # (a spot sprayed out is soon seen not burning and dropped: the aim sweeps on);
+        # without one, face the fire's centre
+        mine = k.spot_fire == state.task_fire[i]
+        if (mine & k.spot_flame).any():  # flames seen: aim at them, not at the hot gas
+            mine &= k.spot_flame
+        spots = k.spot_xy_m[mine]
+        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
+        near = np.flatnonzero(d <= params.spray_range_m)
+        if len(near):
+            sight = line_of_sight(
+                state.coarse, np.repeat(pose[i : i + 1, :2], len(near), 0), spots[near]
+            )
+            near = near[sight]
+        if len(near):
+            rel = spots[near] - pose[i, :2]
+            bearing = np.arctan2(rel[:, 1], rel[:, 0])
+            held = (np.abs(_wrap(bearing[:, None] - bearing[None, :])) <= half).sum(axis=1)
+            best = np.lexsort((d[near], -held))[0]
+            target = spots[near[best]]
+            shot_s[i] = obs.t_s
+            # held up on its way (no closer in the navigation's stuck time) with a shot
+            # already: it stops there and sprays
+            if not at_goal[i] and obs.t_s - state.closest_s[i] >= params.nav.stuck_time_s:
+                settle[i] = True
+        else:
+            target = fxy[int(j[0])]
+        err = float(_wrap(np.arctan2(target[1] - pose[i, 1], target[0] - pose[i, 0]) - pose[i, 2]))
+        if at_goal[i] or settle[i]:
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
-        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
-        s = int(np.argmin(d))
-        spray[i] = (
-            abs(err) <= params.spray_half_angle_rad
-            and d[s] <= params.spray_range_m
-            and obs.tank_l[i] > 0.0
-            and bool(line_of_sight(state.coarse, pose[i : i + 1, :2], spots[s : s + 1])[0])
-        )
+        spray[i] = bool(len(near)) and abs(err) <= half and obs.tank_l[i] > 0.0
+    if settle.any():
+        nav = navigation_retarget(nav, pose[:, :2], settle)
+        at_goal = at_goal | settle
+    # a fighter that has stood without a shot for reslot_s gets a new slot (next plan)
+    reslot = (mode == FIGHT) & at_goal & (obs.t_s - shot_s >= params.reslot_s)
+    pending = state.pending
+    if reslot.any():
+        goals = goals.copy()
+        goals[reslot] = np.nan
+        shot_s[reslot] = obs.t_s
+        pending = True
     for i in map(int, np.flatnonzero((mode == CONFIRM) & at_goal)):
         vic = k.victim_xy_m[state.task_victim[i]]
         err = float(_wrap(np.arctan2(vic[1] - pose[i, 1], vic[0] - pose[i, 0]) - pose[i, 2]))
@@ -302,7 +266,8 @@ def _orders(
     scan = (mode == EXPLORE) & arrived
     v[scan] = 0.0
     w[scan] = params.scan_omega_rad_s
-    refilling = (mode == REFILL) & at_goal
+    # refilling only by the refill point (not where a blocked path left it)
+    refilling = (mode == REFILL) & at_goal & (d_goal <= params.refill_radius_m)
     stop = (mode == DAMAGED) | refilling | (mode == IDLE)
     v[stop] = 0.0
     w[stop] = 0.0
@@ -314,7 +279,15 @@ def _orders(
         mode=mode.astype(np.int8),
         goal_xy_m=state.goal_xy_m.copy(),
     )
-    return replace(state, nav=nav, orders=orders, refilling=refilling)
+    return replace(
+        state,
+        nav=nav,
+        orders=orders,
+        refilling=refilling,
+        shot_s=shot_s,
+        goal_xy_m=goals,
+        pending=pending,
+    )
 
 
 def _tank_changes(
@@ -327,6 +300,10 @@ def _tank_changes(
     """Empty tanks go to refill at once; full ones come back (an allocation follows)."""
     mode = state.mode
     empty = working & (tank <= _empty_l(params)) & (mode != REFILL)
+    if len(state.knowledge.spot_xy_m):
+        # while a fire burns, a robot off the fires with a low tank tops it up
+        idle = (mode == EXPLORE) | (mode == IDLE)
+        empty |= working & idle & (tank < params.low_tank_frac * params.tank_l)
     full = (mode == REFILL) & (tank >= 0.98 * params.tank_l)
     if not (empty.any() or full.any()):
         return state
@@ -356,6 +333,33 @@ def _tank_changes(
         pending=True,
     )
     return _retarget(new, goals, pose)
+
+
+def _too_hot(
+    state: TacticsState,
+    pose: FloatArray,
+    air_c: FloatArray,
+    working: BoolArray,
+    params: TacticsParams,
+) -> TacticsState:
+    """A robot in air of ``retreat_c`` or more marks its place hot (once per half metre);
+    a fighter there gets a new slot at the next plan."""
+    hot = working & (air_c >= params.retreat_c)
+    if not hot.any():
+        return state
+    known = state.hot_xy_m
+    new: list[FloatArray] = []
+    for i in map(int, np.flatnonzero(hot)):
+        pts = np.vstack([known, *new]) if new else known
+        if len(pts) == 0 or np.hypot(*(pts - pose[i, :2]).T).min() > 0.5:
+            new.append(pose[i : i + 1, :2].copy())
+    if not new:
+        return state
+    fresh = np.vstack(new)
+    goals = state.goal_xy_m.copy()
+    leave = hot & (state.mode == FIGHT)
+    goals[leave] = np.nan
+    return replace(state, hot_xy_m=np.vstack([known, fresh]), goal_xy_m=goals, pending=True)
 
 
 def _dropped(state: TacticsState, pose: FloatArray, lost: BoolArray) -> TacticsState:
@@ -487,6 +491,7 @@ def tactics_step(
             looked,
             t,
             params,
+            None if obs.fire_peak_c is None else np.asarray(obs.fire_peak_c, dtype=float),
         )
         state = replace(
             state,
@@ -495,6 +500,8 @@ def tactics_step(
             messages_sent=state.messages_sent + len(fire_xy) + len(person_xy),
         )
     state = _tank_changes(state, pose, tank, working, params)
+    if obs.air_c is not None:
+        state = _too_hot(state, pose, np.asarray(obs.air_c, dtype=float), working, params)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(
             state.coarse, pose[working], params.sensing_range_m, params.hfov_rad

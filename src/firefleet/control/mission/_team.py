@@ -57,6 +57,12 @@ class TacticsState:
         The stall watchdog: each robot's least distance to its goal so far [m], and
         when it last came 0.2 m closer [s]. An explorer that has not for ``stall_s``
         gives its frontier up (it joins ``excluded``) and the team re-plans.
+    shot_s : ndarray, shape (N,)
+        When each fighter last had a shot at its fire, or last moved [s]: one that
+        stands ``reslot_s`` without one gets a new slot.
+    hot_xy_m : ndarray, shape (K, 2)
+        Places where a robot's air reached ``retreat_c`` [m]: slots keep ``standoff_m``
+        from them.
     pending : bool
         A detection or a robot's state changed since the last allocation.
     last_plan_s, next_coverage_s, next_nav_s : float
@@ -93,6 +99,8 @@ class TacticsState:
     known_damaged: BoolArray
     closest_m: FloatArray
     closest_s: FloatArray
+    shot_s: FloatArray
+    hot_xy_m: FloatArray
     pending: bool
     last_plan_s: float
     next_coverage_s: float
@@ -251,6 +259,8 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         known_damaged=np.zeros(n, dtype=bool),
         closest_m=np.full(n, np.inf),
         closest_s=np.zeros(n),
+        shot_s=np.zeros(n),
+        hot_xy_m=np.zeros((0, 2)),
         pending=True,
         last_plan_s=-np.inf,
         next_coverage_s=-np.inf,

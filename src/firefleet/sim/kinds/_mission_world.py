@@ -48,6 +48,7 @@ from firefleet.world import (
     HEAT,
     SMOKE,
     UNBURNT,
+    FieldParams,
     FireParams,
     FireState,
     OccupancyGrid,
@@ -190,6 +191,7 @@ class MissionWorld:
     fire_params: FireParams = dataclasses.field(default_factory=FireParams)
     spray_params: SprayParams = dataclasses.field(default_factory=SprayParams)
     victim_params: VictimParams = dataclasses.field(default_factory=VictimParams)
+    smoke_params: FieldParams = SMOKE  # world.fuel.smoke_yield scales its source
     found_radius_m: float = 2.0
     pt100: Pt100Params = dataclasses.field(default_factory=Pt100Params)
 
@@ -280,7 +282,7 @@ class MissionWorld:
         burning = fire.state == BURNING
         temp = diffuse_step(temp, open_cells, burning, HEAT, dt, self.field.resolution_m)
         smoke = diffuse_step(
-            state.smoke_per_m, open_cells, burning, SMOKE, dt, self.field.resolution_m
+            state.smoke_per_m, open_cells, burning, self.smoke_params, dt, self.field.resolution_m
         )
         vr, vc = self.victim_cells[:, 0], self.victim_cells[:, 1]
         victims = victim_step(
@@ -402,6 +404,7 @@ class MissionSensors:
     dt_s: float
     rng: np.random.Generator
     depth_noise: float = 0.03
+    visible: Any = None  # a stereo-only team's camera (_mission_smoke.VisibleDetector)
 
     def read(self, world: MissionWorldState, drive: DriveState) -> Messages:
         """Readings at this tick, by name (module notes)."""
@@ -417,6 +420,9 @@ class MissionSensors:
         out["looked"] = np.full(pose.shape[0], float(looked))
         if not looked:
             out["thermal_detections"] = np.zeros((0, 5))
+            return out
+        if self.visible is not None:  # no thermal camera: the visible one, through smoke
+            out["thermal_detections"] = self.visible.read(world, drive.pose, world.damaged)
             return out
         from firefleet.sim.sensors import render_thermal_grid_depth
 

@@ -35,6 +35,7 @@ from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
 from firefleet.scenarios._mission import Mission
 from firefleet.scenarios.schema import Scenario
+from firefleet.sim.kinds._mission_smoke import STEREO_METRIC_NAMES, stereo_team_metrics
 from firefleet.sim.kinds._mission_world import (
     FIRE,
     PERSON,
@@ -71,6 +72,7 @@ METRIC_NAMES = (
     "collisions",
     "robots_damaged",
     "water_used_l",
+    *STEREO_METRIC_NAMES,
 )
 
 REFILL_L_S = 2.0
@@ -122,7 +124,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     fires = np.array([[f.x_m, f.y_m] for f in spec.fires], dtype=float).reshape(-1, 2)
     victims = np.array([[v.x_m, v.y_m] for v in spec.victims], dtype=float).reshape(-1, 2)
     from firefleet.models.pt100 import Pt100Params
-    from firefleet.world import FireParams, SprayParams
+    from firefleet.world import SMOKE, FireParams, SprayParams
 
     pt100 = scenario.sensors.pt100 if scenario.sensors is not None else None
 
@@ -144,29 +146,39 @@ def mission_world(scenario: Scenario) -> MissionWorld:
         spray_params=SprayParams(flow_l_s=cmd.flow_l_s, range_m=cmd.spray_range_m),
         fire_params=FireParams(spread_m_s=spec.spread_m_s),
         pt100=pt100.params() if pt100 is not None else Pt100Params(),
+        smoke_params=dataclasses.replace(SMOKE, source=SMOKE.source * spec.fuel.smoke_yield),
     )
 
 
-def _range_sensors(scenario: Scenario, grid: OccupancyGrid, rng: np.random.Generator) -> Any:
+def _range_sensors(
+    scenario: Scenario, grid: OccupancyGrid, rng: np.random.Generator, smoke: Any = None
+) -> Any:
+    from firefleet.sim.kinds._mission_smoke import stereo_scan_params
     from firefleet.sim.kinds.navigate import _sensor_params  # the same sensors, one reading
     from firefleet.sim.ranging import RangeSensors
 
     params = _sensor_params(scenario)
-    if not params:
+    stereo = stereo_scan_params(_command(scenario).perception)  # a stereo-only team's scan
+    if not params and stereo is None:
         return None
     return RangeSensors(
         grid,
         _command(scenario).robot_radius_m,
         ultrasonic=params.get("ultrasonic_range_m"),
         lidar=params.get("lidar_range_m"),
+        stereo=stereo,
         dt_s=scenario.dt_s,
         rng=rng,
+        smoke=smoke,  # smoke dims the lidar and the stereo scan (_mission_smoke)
     )
 
 
 def mission_stages(scenario: Scenario, decider: Decider, rng: np.random.Generator) -> Stages:
     """The mission's stages (module notes)."""
+    from firefleet.sim.kinds._mission_smoke import SmokeAt, VisibleDetector
+    from firefleet.sim.kinds._mission_world import LOWER_LAYER
     from firefleet.sim.sensors import ThermalCameraParams
+    from firefleet.sim.visible import VisibleCameraParams
 
     world = mission_world(scenario)
     spec = scenario.sensors
@@ -176,13 +188,20 @@ def mission_stages(scenario: Scenario, decider: Decider, rng: np.random.Generato
         supersample=thermal.supersample if thermal is not None else 2,
         netd_k=thermal.netd_k if thermal is not None else 0.05,
     )
+    smoke = SmokeAt(world.field, LOWER_LAYER)
+    visible = None
+    if _command(scenario).perception == "stereo":  # no thermal camera: Jin's law in smoke
+        visible = VisibleDetector(
+            _grid(scenario), smoke, world.victim_xy_m, VisibleCameraParams(), rng=rng
+        )
     sensors = MissionSensors(
         world=world,
-        ranging=_range_sensors(scenario, _grid(scenario), rng),
+        ranging=_range_sensors(scenario, _grid(scenario), rng, smoke),
         camera=camera,
         every=max(1, round(1.0 / (rate * scenario.dt_s))),
         dt_s=scenario.dt_s,
         rng=rng,
+        visible=visible,
     )
     stages: Any = dataclasses.replace  # the Stages fields are typed for the default stages
     out: Stages = stages(
@@ -203,11 +222,13 @@ class MissionParams:
     geometry: Any
     bearings_rad: dict[str, FloatArray]
     robots: bool
+    arrive_s: float = 0.0
 
 
 def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
     from firefleet.control.mission import TacticsParams, tactics_init
     from firefleet.control.navigation import DwaParams, NavigationParams
+    from firefleet.sim.kinds._mission_smoke import stereo_scan_params
     from firefleet.sim.kinds.navigate import reading_bearings
 
     cmd = _command(scenario)
@@ -221,32 +242,46 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
         # detector cannot call a standing person a person from much closer: the frame
         # cuts them); found when that position lies within 2 m of them (the world's test)
         confirm_radius_m=3.0,
+        # a fighter leaves air at two thirds of its rating (the hot layer can rise by
+        # tens of degrees in the seconds it takes to drive off)
+        retreat_c=2.0 / 3.0 * cmd.rating_c,
         # a fire never takes the whole team: one robot at least keeps searching for people
         fire_robots_max=max(1, min(6, scenario.n_robots - 1)),
         fire_robots_min=min(2, max(1, scenario.n_robots - 1)),
         # the lighter dynamic window (5 x 9 candidates over 8 steps, control.mission's
         # notes): four times cheaper than navigate's 9 x 21 x 15, and on mission-office
         # seed 0 the finer one left a victim unfound and two robots touching
+        # DWA's disc is the robot's plus the planner's margin (0.05 m): it avoids the
+        # teammates where their dead-reckoned estimates put them, a few cm off (mission-office
+        # seed 0: two robots touched at 0.293 m between centres with the bare radius)
         nav=NavigationParams(
-            robot_radius_m=cmd.robot_radius_m, dwa=DwaParams(n_v=5, n_omega=9, n_steps=8)
+            robot_radius_m=cmd.robot_radius_m,
+            dwa=DwaParams(n_v=5, n_omega=9, n_steps=8, robot_radius_m=cmd.robot_radius_m + 0.05),
         ),
     )
-    params = MissionParams(tactics, scenario.robot, reading_bearings(scenario), cmd.robots)
+    bearings = reading_bearings(scenario)
+    stereo = stereo_scan_params(cmd.perception)
+    if stereo is not None:  # a stereo-only team navigates with its scan too
+        bearings["stereo_scan_m"] = np.asarray(stereo.bearings_rad)
+    params = MissionParams(tactics, scenario.robot, bearings, cmd.robots, cmd.arrive_s)
     if not cmd.robots:
         return None, params
     return tactics_init(_grid(scenario), scenario.initial_poses, tactics), params
 
 
-def _on_map(rows: FloatArray, pose: FloatArray, kind: int) -> tuple[FloatArray, np.ndarray]:
-    """Detections of one kind placed on the map by the robots' pose estimates."""
+def _on_map(
+    rows: FloatArray, pose: FloatArray, kind: int
+) -> tuple[FloatArray, np.ndarray, FloatArray]:
+    """Detections of one kind placed on the map by the robots' pose estimates: (K, 2)
+    positions, robots, peak readings [C]."""
     if not rows.shape[0]:  # most ticks: no frame, nothing to place
-        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0)
     pick = rows[rows[:, 1] == kind]
     robot = pick[:, 0].astype(np.int64)
     heading = pose[robot, 2] + pick[:, 2]
     xy = pose[robot, :2] + pick[:, 3:4] * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
     ok = np.isfinite(xy).all(axis=1)
-    return xy[ok], robot[ok]
+    return xy[ok], robot[ok], pick[ok, 4]
 
 
 def mission_decide(
@@ -282,9 +317,12 @@ def mission_decide(
     if not params.robots:
         zero = np.zeros((n, 2))
         return state, WheelCommand(reference_rad_s=zero, series={"tank_l": tank})
+    if inputs.t_s < params.arrive_s:  # the team has not entered yet: it waits, idle
+        idle = {"mode": np.full(n, 4.0), "spray": np.zeros(n), "tank_l": tank}  # MODES[4]
+        return state, WheelCommand(reference_rad_s=np.zeros((n, 2)), series=idle)
     rows = np.asarray(inputs.readings["thermal_detections"]).reshape(-1, 5)
-    fire_xy, fire_robot = _on_map(rows, pose, FIRE)
-    person_xy, person_robot = _on_map(rows, pose, PERSON)
+    fire_xy, fire_robot, fire_peak = _on_map(rows, pose, FIRE)
+    person_xy, person_robot, _ = _on_map(rows, pose, PERSON)
     damaged = np.asarray(inputs.readings["damaged"]) > 0.5
     ranges = {
         name: (inputs.readings[name], bearings)
@@ -304,6 +342,10 @@ def mission_decide(
         damaged=damaged,
         alive=~damaged,
         looked=looked,
+        fire_peak_c=fire_peak,
+        air_c=np.asarray(inputs.readings["air_c"], dtype=float)
+        if "air_c" in inputs.readings
+        else None,
     )
     state, orders = tactics_step(state, obs, params.tactics, dt_s)
     v = np.where(damaged, 0.0, orders.v_m_s)
@@ -483,6 +525,7 @@ def mission_metrics(result: SimResult) -> Metrics:
         "collisions": float(collided),
         "robots_damaged": float(np.count_nonzero(np.asarray(x["damaged"]) > 0.5)),
         "water_used_l": [float(v) for v in np.asarray(x["water_used_l"])],
+        **stereo_team_metrics(scenario, mission_metrics),  # NaN unless command.stereo_team
     }
 
 

@@ -1,0 +1,139 @@
+"""Where the fighters stand: the fire's costmap (paths round the fires) and the ring's
+slots with a shot at the fire (:mod:`._ring`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import scipy.ndimage as ndi
+
+from firefleet._typing import BoolArray, FloatArray, IntArray
+from firefleet.control.mission._knowledge import fires_of
+from firefleet.control.mission._params import TacticsParams
+from firefleet.control.mission._ring import ring_slots
+from firefleet.control.mission._team import TacticsState
+from firefleet.control.navigation import Costmap
+from firefleet.world import OccupancyGrid
+
+__all__ = ["fight_goals", "fire_costmap", "shot_limits_m"]
+
+
+def _reachable(blocked: BoolArray, grid: OccupancyGrid, xy_m: FloatArray) -> BoolArray:
+    """Map cells connected (8-neighbours) through unblocked cells to any of the points
+    (M, 2) [m]: where the robots there can plan to."""
+    free = ~np.asarray(blocked)
+    labels, _ = ndi.label(free, structure=np.ones((3, 3), dtype=bool))
+    rc = grid.cell_of(np.asarray(xy_m, dtype=float).reshape(-1, 2))
+    h, w = free.shape
+    lab = labels[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+    lab = lab[lab > 0]
+    out: BoolArray = np.isin(labels, lab) if len(lab) else free
+    return out
+
+
+def _aim_spots(state: TacticsState, fire: int) -> FloatArray:
+    """The spots of a fire its fighters aim at: its flames when it has any, else all."""
+    k = state.knowledge
+    mine = k.spot_fire == fire
+    if (mine & k.spot_flame).any():
+        mine &= k.spot_flame
+    out: FloatArray = k.spot_xy_m[mine]
+    return out
+
+
+def shot_limits_m(params: TacticsParams) -> tuple[float, float]:
+    """Nearest and farthest a fighter's shot may be [m]: a quarter metre outside the
+    cells paths never enter (``fire_block_m``), and half a metre inside the nozzle's
+    reach (a spot is where a detection put the flames, within the detector's error)."""
+    return params.fire_block_m + 0.25, max(params.spray_range_m - 0.5, 0.5 * params.spray_range_m)
+
+
+def fight_goals(
+    state: TacticsState,
+    pose: FloatArray,
+    task_fire: IntArray,
+    old_fire: IntArray,
+    goals: FloatArray,
+    params: TacticsParams,
+) -> None:
+    """Ring slots of every fought fire into ``goals`` (kept while its team is unchanged
+    and every slot is set)."""
+    ids, fxy, fext = fires_of(state.knowledge)
+    reach: BoolArray | None = None
+    near_m, shot_m = shot_limits_m(params)
+    gap = 2.0 * params.nav.robot_radius_m + params.nav.margin_m + 0.15
+    for j, fid in enumerate(ids):
+        team = np.flatnonzero(task_fire == fid)
+        if len(team) == 0:
+            continue
+        same = np.all(old_fire[team] == fid) and np.sum(old_fire == fid) == len(team)
+        if same and np.isfinite(goals[team, 0]).all():
+            continue
+        if reach is None:
+            # reachable without crossing the cells within fire_block_m of a spot
+            # (except round the robots: one near a fire can always leave)
+            blocked = np.array(state.nav.costmap.blocked)
+            if params.fire_block_m > 0.0:
+                spots = state.knowledge.spot_xy_m
+                grid = state.nav.costmap.grid
+                blocked |= _disc_mask(grid, spots, params.fire_block_m) & ~_disc_mask(
+                    grid, pose[:, :2], 1.0
+                )
+            reach = _reachable(blocked, state.nav.costmap.grid, pose[:, :2])
+        radius = fext[j] + params.standoff_m
+        goals[team] = ring_slots(
+            state.coarse,
+            state.nav.costmap,
+            fxy[j],
+            radius,
+            pose[team, :2],
+            spots_xy_m=_aim_spots(state, fid),
+            reachable=reach,
+            near_m=near_m,
+            shot_m=shot_m,
+            gap_m=gap,
+            avoid_xy_m=state.hot_xy_m,
+            avoid_m=params.standoff_m,
+        )
+
+
+def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArray:
+    """Map cells whose centres lie within ``radius_m`` of any point ``xy`` (M, 2)."""
+    grid_shape = grid.shape
+    h, w = grid_shape
+    k = math.ceil(radius_m / grid.resolution_m) + 1
+    out = np.zeros(grid_shape, dtype=bool)
+    for p in xy:
+        r, c = (int(v) for v in grid.cell_of(p))
+        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
+        if r0 >= r1 or c0 >= c1:
+            continue
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        centres = grid.center_of(np.stack([rr, cc], axis=-1))
+        out[r0:r1, c0:c1] |= np.hypot(centres[..., 0] - p[0], centres[..., 1] - p[1]) <= radius_m
+    return out
+
+
+def fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -> TacticsState:
+    """The navigation costmap round the fires: ``fire_cost`` more per metre within
+    ``fire_keepout_m`` of every burning spot (A* goes round a fire where it can), and
+    ten times that within ``fire_block_m`` of one (paths cross there only where there
+    is no other way: a hard block trapped robots behind the spots a fire put at a door,
+    mission-office seed 2; the slots never lie there, :func:`fight_goals`)."""
+    base = state.base_costmap
+    spots = state.knowledge.spot_xy_m
+    if len(spots) == 0:
+        if state.nav.costmap is base:
+            return state
+        return replace(state, nav=replace(state.nav, costmap=base))
+    grid = base.grid
+    near = _disc_mask(grid, spots, params.fire_keepout_m)
+    cost = np.where(near, base.cost + params.fire_cost, base.cost)
+    if params.fire_block_m > 0.0:
+        hot = _disc_mask(grid, spots, params.fire_block_m) & ~base.blocked
+        cost[hot] += 10.0 * params.fire_cost
+    cost.setflags(write=False)
+    costmap = Costmap(base.grid, base.clearance_m, base.blocked, cost, base.inflation_m)
+    return replace(state, nav=replace(state.nav, costmap=costmap))
