@@ -38,7 +38,7 @@ from firefleet._typing import FloatArray
 from firefleet.control.pid import PidParams, PidState, pid_init, pid_step
 from firefleet.errors import InputError, check_fields
 from firefleet.models.encoder import EncoderParams, EncoderState, encoder_init, encoder_step
-from firefleet.models.kinematics import RobotGeometry, diff_drive_step
+from firefleet.models.kinematics import RobotGeometry, _arc_step, diff_drive_step
 from firefleet.models.motor import DiscreteMotor, MotorParams, discretise_motor, motor_step
 
 __all__ = [
@@ -386,6 +386,19 @@ def dead_reckoning(
     return diff_drive_step(pose, counted, stack.geometry)
 
 
+def _wheels_arc(pose: FloatArray, dphi_rad: FloatArray, geometry: RobotGeometry) -> FloatArray:
+    """:func:`diff_drive_step` on arrays already checked: the same arithmetic, unvalidated.
+
+    ``pose`` (N, 3) and ``dphi_rad`` (N, 2) float64 arrays, as :func:`drive_step` holds
+    them; the 100 Hz loop skips the input checks of the public function (a third of its
+    cost at 3 robots).
+    """
+    r, axle = geometry.wheel_radius_m, geometry.axle_length_m
+    ds = r * (dphi_rad[:, 0] + dphi_rad[:, 1]) / 2.0
+    dtheta = r * (dphi_rad[:, 0] - dphi_rad[:, 1]) / axle
+    return _arc_step(pose, ds, dtheta)
+
+
 def drive_step(
     state: DriveState,
     voltage_v: ArrayLike,
@@ -445,10 +458,11 @@ def drive_step(
             travel = travel * scale
         slip = rng.standard_normal(dphi.shape) * np.sqrt(stack.slip_variance_m * travel)
         turned = turned + slip / radius
-    pose = diff_drive_step(state.pose, turned, stack.true_geometry)
+    pose = _wheels_arc(state.pose, np.asarray(turned, dtype=np.float64), stack.true_geometry)
     odometry = state.odometry
     if odometry is not None:
-        odometry = dead_reckoning(odometry, state.encoder.history[-1], counts, stack)
+        counted = (counts - state.encoder.history[-1]) * stack.count_angle_rad
+        odometry = _wheels_arc(odometry, counted, stack.geometry)  # dead_reckoning's
     return DriveState(
         pose=pose,
         current_a=current,
