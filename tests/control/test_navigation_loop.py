@@ -80,7 +80,9 @@ def test_compiled_arc_evaluation_matches_numpy() -> None:
         obs = rng.uniform(-2, 2, size=(12, 2))
         rad = rng.uniform(0, 0.2, size=12)
         v, w = rng.uniform(0, 0.7), rng.uniform(-4, 4) * (rng.random() > 0.2)
-        got = _evaluate(pose, v, w, obs, rad, 0.15, 1.5, 15)
+        reach = np.hypot(obs[:, 0] - pose[0], obs[:, 1] - pose[1]) - rad  # sorted by it
+        order = np.argsort(reach)
+        got = _evaluate(pose, v, w, obs[order], rad[order], reach[order], 0.15, 1.5, 15)
         ref = _numpy_evaluate(pose, v, w, obs, rad, 0.15, 1.5, 15)
         assert got[0] == pytest.approx(ref[0], abs=1e-12)
         assert got[1] == pytest.approx(ref[1], abs=1e-12) or got[1] == ref[1] == np.inf

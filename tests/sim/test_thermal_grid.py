@@ -174,3 +174,39 @@ def test_bad_shapes_are_refused() -> None:
             np.zeros((0, 2)),
             rng=np.random.default_rng(0),
         )
+
+
+@pytest.mark.parametrize("supersample", [1, 2, 3])
+def test_compiled_camera_equals_the_numpy_camera(supersample: int) -> None:
+    """The one-pass compiled frames (rays, per-pixel radiance mean, camera) equal the
+    NumPy composition of the same steps: the rays of grid_thermal_celsius, band radiance,
+    the mean over each pixel's rays, the camera's offsets, noise, clip, quantisation."""
+    from firefleet.perception.thermal import band_radiance
+    from firefleet.sim._thermal_grid import grid_thermal_celsius
+    from firefleet.sim.sensors import _camera_output, _ray_grid, render_thermal_grid_depth
+
+    grid = _room()
+    rng = np.random.default_rng(supersample)
+    temp = 20.0 + rng.uniform(0.0, 30.0, grid.shape)
+    burning = np.zeros(grid.shape, dtype=bool)
+    burning[8:10, 30:32] = True
+    temp[burning] = 700.0
+    people = np.array([[6.0, 3.0], [3.0, 1.5]])
+    prm = ThermalCameraParams(supersample=supersample)
+    scene = GridThermalScene(lower_fraction=0.4)
+    poses = np.array([[1.0, 2.0, 0.2], [8.0, 4.0, math.pi + 0.4], [5.0, 1.0, -0.3]])
+    got, depth = render_thermal_grid_depth(
+        poses, grid, temp, burning, people, prm, rng=np.random.default_rng(5), scene=scene
+    )
+    xn, yn = _ray_grid(prm)
+    temps, rays_depth = grid_thermal_celsius(
+        poses, grid, temp, burning, people, xn, yn, prm.mount_height_m, scene
+    )
+    s, n = supersample, poses.shape[0]
+    radiance = band_radiance(temps).reshape(n, 60, s, 80, s).mean(axis=(2, 4))
+    want = _camera_output(radiance, prm, np.random.default_rng(5))
+    np.testing.assert_array_equal(got, want)
+    centre = rays_depth.reshape(n, 60, s, 80, s)[:, :, s // 2, :, s // 2]
+    np.testing.assert_array_equal(depth, np.where(np.isfinite(centre), centre, np.nan))
+    assert (got > 400.0).any()  # the flame
+    assert (got < 25.0).any()  # the cool floor

@@ -35,9 +35,10 @@ from numpy.typing import ArrayLike
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array, check_fields
+from firefleet.perception.thermal._table import interp_sorted_from
 from firefleet.world import BODY_C, OccupancyGrid
 
-__all__ = ["GridThermalScene", "grid_thermal_celsius"]
+__all__ = ["GridThermalScene", "grid_thermal_celsius", "grid_thermal_frames"]
 
 _INF = np.inf
 
@@ -160,7 +161,36 @@ def _walk(
 
 
 @numba.njit(cache=True)
-def _render(
+def _people_along(
+    x0: float,
+    y0: float,
+    ux: float,
+    uy: float,
+    people: np.ndarray,
+    person_w: float,
+    s_people: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Where the horizontal ray (ux, uy) from (x0, y0) meets each person's billboard
+    (facing the camera) [m], inf where it misses."""
+    for v in range(people.shape[0]):
+        px, py = people[v, 0] - x0, people[v, 1] - y0
+        dist = np.sqrt(px * px + py * py)
+        s_people[v] = np.inf
+        if dist < 1e-9:
+            continue
+        ex, ey = -py / dist * person_w, px / dist * person_w  # the billboard's width
+        wx, wy = px - 0.5 * ex, py - 0.5 * ey  # its right edge
+        den = ux * ey - uy * ex
+        if den == 0.0:
+            continue
+        s = (wx * ey - wy * ex) / den
+        u = (wx * uy - wy * ux) / den
+        if s > 1e-9 and 0.0 <= u <= 1.0:
+            s_people[v] = s
+
+
+@numba.njit(cache=True)
+def _cast(
     poses: np.ndarray,
     occ: np.ndarray,
     temp: np.ndarray,
@@ -169,31 +199,36 @@ def _render(
     people: np.ndarray,
     xn: np.ndarray,
     yn: np.ndarray,
-    mount_h: float,
-    wall_h: float,
-    flame_h: float,
-    person_w: float,
-    person_h: float,
-    person_c: float,
-    outside_c: float,
+    scene: np.ndarray,
     ceiling: bool,
-    layer_h: float,
-    lower: float,
-    ambient: float,
-) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    temps_out: np.ndarray,
+    depth_out: np.ndarray,
+) -> None:  # pragma: no cover - compiled
     """Apparent temperature of every ray and its depth along the optical axis [m]
-    (inf where it leaves the grid), each of shape (N, len(yn), len(xn))."""
+    (inf where it leaves the grid) into ``temps_out`` and ``depth_out``, each of shape
+    (N, len(xn), len(yn)) (column by column: a column's rays share one walk).
+
+    ``scene``: mount height, wall height, flame height, person width, person height,
+    person temperature, outside temperature, layer height, lower fraction, ambient.
+    Each column is one horizontal walk to the first wall; each of its rays then meets
+    the wall (below the hot layer: the lower layer's temperature), the floor or the
+    ceiling in the cell it crosses there, the first flame column it passes through, or
+    a person's billboard, whichever is nearest.
+    """
+    mount_h, wall_h, flame_h = scene[0], scene[1], scene[2]
+    person_w, person_h, person_c = scene[3], scene[4], scene[5]
+    outside_c, layer_h, lower, ambient = scene[6], scene[7], scene[8], scene[9]
     n_robots = poses.shape[0]
     n_rows = yn.size
     n_cols = xn.size
-    out = np.empty((n_robots, n_rows, n_cols))
-    depth = np.empty((n_robots, n_rows, n_cols))
     cap = 4 * (occ.shape[0] + occ.shape[1]) + 8
     s_out = np.empty(cap)
     t_out = np.empty(cap)
     b_out = np.zeros(cap, dtype=np.bool_)
+    fires = np.empty(cap, dtype=np.int64)
     n_people = people.shape[0]
     s_people = np.empty(n_people)
+    seen = np.empty(n_people, dtype=np.int64)
     for k in range(n_robots):
         x0, y0, th = poses[k, 0], poses[k, 1], poses[k, 2]
         ct, st = np.cos(th), np.sin(th)
@@ -203,21 +238,18 @@ def _render(
             length = np.sqrt(dx * dx + dy * dy)
             ux, uy = dx / length, dy / length
             n, s_wall, t_wall = _walk(x0, y0, ux, uy, occ, temp, burn, res, s_out, t_out, b_out)
-            for v in range(n_people):  # each person's billboard, facing the camera
-                px, py = people[v, 0] - x0, people[v, 1] - y0
-                dist = np.sqrt(px * px + py * py)
-                s_people[v] = np.inf
-                if dist < 1e-9:
-                    continue
-                ex, ey = -py / dist * person_w, px / dist * person_w  # the billboard's width
-                wx, wy = px - 0.5 * ex, py - 0.5 * ey  # its right edge
-                den = ux * ey - uy * ex
-                if den == 0.0:
-                    continue
-                s = (wx * ey - wy * ex) / den
-                u = (wx * uy - wy * ux) / den
-                if s > 1e-9 and 0.0 <= u <= 1.0:
-                    s_people[v] = s
+            n_fires = 0
+            for i in range(n):
+                if b_out[i]:
+                    fires[n_fires] = i
+                    n_fires += 1
+            _people_along(x0, y0, ux, uy, people, person_w, s_people)
+            n_seen = 0  # the people whose billboard the column's plane meets, in order
+            for v in range(n_people):
+                if s_people[v] < np.inf:
+                    seen[n_seen] = v
+                    n_seen += 1
+            lo = 0  # the floor or ceiling cell of the column's previous ray
             for r in range(n_rows):
                 slope = -yn[r] / length  # height gained per horizontal metre
                 best = s_wall
@@ -233,25 +265,23 @@ def _render(
                 if s_plane < best:
                     best = s_plane
                     # the cell holding that point: the first whose exit lies beyond it
-                    lo, hi = 0, n
-                    while lo < hi:
-                        mid = (lo + hi) // 2
-                        if s_out[mid] < s_plane:
-                            lo = mid + 1
-                        else:
-                            hi = mid
+                    # (neighbouring rays meet the floor in neighbouring cells)
+                    lo = min(lo, n)
+                    while lo > 0 and s_out[lo - 1] >= s_plane:
+                        lo -= 1
+                    while lo < n and s_out[lo] < s_plane:
+                        lo += 1
                     best_t = t_out[lo] if lo < n else outside_c
                     if slope < 0.0 and lo < n:  # the floor, under the hot layer
                         best_t = ambient + lower * (best_t - ambient)
                 elif s_wall == np.inf and best == np.inf:
                     best_t = outside_c
                 # flames: the first burning cell whose column of flame the ray crosses
-                for i in range(n):
+                for f in range(n_fires):
+                    i = fires[f]
                     s0 = 0.0 if i == 0 else s_out[i - 1]
                     if s0 >= best:
                         break
-                    if not b_out[i]:
-                        continue
                     z0 = mount_h + slope * s0
                     z1 = mount_h + slope * s_out[i]
                     if min(z0, z1) <= flame_h and max(z0, z1) >= 0.0:
@@ -260,16 +290,210 @@ def _render(
                             best = s_hit
                             best_t = t_out[i]
                         break
-                for v in range(n_people):
-                    s = s_people[v]
+                for q in range(n_seen):
+                    s = s_people[seen[q]]
                     if s < best:
                         z = mount_h + slope * s
                         if 0.0 <= z <= person_h:
                             best = s
                             best_t = person_c
-                out[k, r, c] = best_t
-                depth[k, r, c] = best / length  # forward component of the unit ray: 1/length
-    return out, depth
+                temps_out[k, c, r] = best_t
+                depth_out[k, c, r] = best / length  # forward part of the unit ray: 1/length
+
+
+@numba.njit(cache=True)
+def _frames(
+    temps: np.ndarray,
+    depth: np.ndarray,
+    sub: int,
+    table_c: np.ndarray,
+    table_rad: np.ndarray,
+    offsets: np.ndarray,
+    noise: np.ndarray,
+    camera: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, bool]:  # pragma: no cover - compiled
+    """The camera's frames (N, H, W) [C] from the rays of :func:`_cast` (N, W s, H s),
+    each pixel's central-ray depth [m] (NaN: nothing on the grid), and False if a
+    temperature left the radiance table: per pixel the mean band radiance of its
+    ``sub`` x ``sub`` rays (summed along each sub-row, then the sub-rows: NumPy's
+    order), back to a temperature, plus the column offset and the noise, clipped to
+    ``camera[0:2]`` and quantised to ``camera[2]``."""
+    min_c, max_c, step_k = camera[0], camera[1], camera[2]
+    t_lo, t_hi = table_c[0], table_c[-1]
+    step_c = (t_hi - t_lo) / (table_c.size - 1)
+    per_step = 1.0 / step_c
+    n_robots, n_cols, n_rows = temps.shape
+    h_px, w_px = n_rows // sub, n_cols // sub
+    frames = np.empty((n_robots, h_px, w_px))
+    centre = np.empty((n_robots, h_px, w_px))
+    rad = np.empty((n_cols, n_rows))
+    mid = sub // 2
+    ok = True
+    for k in range(n_robots):
+        last_t = np.nan
+        last_rad = np.nan
+        for c in range(n_cols):
+            for r in range(n_rows):
+                t = temps[k, c, r]
+                if t == last_t:  # neighbouring rays often meet the same cell
+                    rad[c, r] = last_rad
+                    continue
+                if not t_lo <= t <= t_hi:
+                    ok = False
+                    t = min(max(t, t_lo), t_hi)
+                j = int((t - t_lo) * per_step)
+                last_t = temps[k, c, r]
+                last_rad = interp_sorted_from(t, table_c, table_rad, j, j + 1)
+                rad[c, r] = last_rad
+        for i in range(h_px):
+            for j in range(w_px):
+                d = depth[k, j * sub + mid, i * sub + mid]
+                centre[k, i, j] = d if np.isfinite(d) else np.nan
+                total = 0.0
+                coolest = np.inf
+                hottest = -np.inf
+                for a in range(sub):
+                    part = 0.0
+                    for b in range(sub):
+                        part += rad[j * sub + b, i * sub + a]
+                        coolest = min(coolest, temps[k, j * sub + b, i * sub + a])
+                        hottest = max(hottest, temps[k, j * sub + b, i * sub + a])
+                    total += part
+                # the mean radiance's temperature lies between the coolest ray's and
+                # the hottest's
+                lo = int((min(max(coolest, t_lo), t_hi) - t_lo) * per_step)
+                hi = int((min(max(hottest, t_lo), t_hi) - t_lo) * per_step) + 1
+                t = interp_sorted_from(total / (sub * sub), table_rad, table_c, lo, hi)
+                t = t + offsets[j]
+                t = t + noise[k, i, j]
+                t = min(max(t, min_c), max_c)
+                if step_k > 0:
+                    t = np.rint(t / step_k) * step_k
+                frames[k, i, j] = t
+    return frames, centre, ok
+
+
+def _scene_array(scene: GridThermalScene, mount_height_m: float) -> np.ndarray:
+    """:func:`_cast`'s ``scene`` numbers."""
+    return np.array(
+        [
+            mount_height_m,
+            scene.wall_height_m,
+            scene.flame_height_m,
+            scene.person_size_m[0],
+            scene.person_size_m[1],
+            scene.person_c,
+            scene.outside_c,
+            scene.layer_height_m,
+            scene.lower_fraction,
+            scene.ambient_c,
+        ],
+        dtype=np.float64,
+    )
+
+
+def _cast_rays(
+    poses: ArrayLike,
+    grid: OccupancyGrid,
+    temperature_c: ArrayLike,
+    burning: ArrayLike,
+    people_xy_m: ArrayLike,
+    xn: FloatArray,
+    yn: FloatArray,
+    mount_height_m: float,
+    scene: GridThermalScene,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rays of :func:`_cast`, (N, len(xn), len(yn)) each, from checked inputs."""
+    local, occ, temp, burn, people = _grid_inputs(poses, grid, temperature_c, burning, people_xy_m)
+    xs = np.ascontiguousarray(xn, dtype=np.float64)
+    ys = np.ascontiguousarray(yn, dtype=np.float64)
+    temps = np.empty((local.shape[0], xs.size, ys.size))
+    depth = np.empty_like(temps)
+    _cast(
+        local,
+        occ,
+        temp,
+        burn,
+        grid.resolution_m,
+        people,
+        xs,
+        ys,
+        _scene_array(scene, float(mount_height_m)),
+        scene.ceiling,
+        temps,
+        depth,
+    )
+    return temps, depth
+
+
+def _grid_inputs(
+    poses: ArrayLike,
+    grid: OccupancyGrid,
+    temperature_c: ArrayLike,
+    burning: ArrayLike,
+    people_xy_m: ArrayLike,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The renderers' inputs checked and in the grid frame (rows from the bottom):
+    poses, occupancy, temperature, burning, people."""
+    pose = as_float_array(poses, "poses", (None, 3))
+    h, w = grid.shape
+    temp = as_float_array(temperature_c, "temperature_c", (h, w))
+    burn = np.asarray(burning, dtype=bool)
+    if burn.shape != (h, w):
+        raise InputError(f"burning: shape {burn.shape}, expected the grid's {(h, w)}")
+    people = as_float_array(people_xy_m, "people_xy_m", (None, 2))
+    ox, oy = grid.origin_m
+    local = pose.copy()
+    local[:, 0] -= ox
+    local[:, 1] -= oy
+    return (
+        local,
+        np.ascontiguousarray(grid.occupied[::-1]),
+        np.ascontiguousarray(temp[::-1], dtype=np.float64),
+        np.ascontiguousarray(burn[::-1]),
+        np.ascontiguousarray(people - np.array([ox, oy])),
+    )
+
+
+def grid_thermal_frames(
+    poses: ArrayLike,
+    grid: OccupancyGrid,
+    temperature_c: ArrayLike,
+    burning: ArrayLike,
+    people_xy_m: ArrayLike,
+    xn: FloatArray,
+    yn: FloatArray,
+    supersample: int,
+    mount_height_m: float,
+    scene: GridThermalScene,
+    camera: tuple[FloatArray, FloatArray, float, float, float],
+) -> tuple[FloatArray, FloatArray]:
+    """Every robot's camera frame [C] and central-ray depth [m] (NaN: nothing on the
+    grid), each (N, len(yn) / s, len(xn) / s), in one compiled pass: the rays of
+    :func:`grid_thermal_celsius`, each pixel's mean band radiance over its ``s`` x ``s``
+    rays, and the camera (``camera``: column offsets (W,) [K], noise (N, H, W) [K],
+    scene range min and max [C], quantisation step [K]; no optical blur).
+    """
+    from firefleet.perception.thermal._radiometry import _radiance_table
+
+    temps, depth = _cast_rays(
+        poses, grid, temperature_c, burning, people_xy_m, xn, yn, mount_height_m, scene
+    )
+    offsets, noise, min_c, max_c, step_k = camera
+    table_c, table_rad = _radiance_table((8.0, 14.0))
+    frames, centre, ok = _frames(
+        temps,
+        depth,
+        int(supersample),
+        table_c,
+        table_rad,
+        np.ascontiguousarray(offsets, dtype=np.float64),
+        np.ascontiguousarray(noise, dtype=np.float64),
+        np.array([min_c, max_c, step_k], dtype=np.float64),
+    )
+    if not ok:
+        raise InputError(f"temperatures must be finite, in [{table_c[0]}, {table_c[-1]}] C")
+    return frames, centre
 
 
 def grid_thermal_celsius(
@@ -289,37 +513,7 @@ def grid_thermal_celsius(
     Rays in the camera's normalised coordinates (x right, y down, axis horizontal along
     each robot's heading), from ``mount_height_m`` above the floor.
     """
-    pose = as_float_array(poses, "poses", (None, 3))
-    h, w = grid.shape
-    temp = as_float_array(temperature_c, "temperature_c", (h, w))
-    burn = np.asarray(burning, dtype=bool)
-    if burn.shape != (h, w):
-        raise InputError(f"burning: shape {burn.shape}, expected the grid's {(h, w)}")
-    people = as_float_array(people_xy_m, "people_xy_m", (None, 2))
-    ox, oy = grid.origin_m
-    local = pose.copy()
-    local[:, 0] -= ox
-    local[:, 1] -= oy
-    people_local = people - np.array([ox, oy])
-    temps, depth = _render(
-        local,
-        np.ascontiguousarray(grid.occupied[::-1]),
-        np.ascontiguousarray(temp[::-1], dtype=np.float64),
-        np.ascontiguousarray(burn[::-1]),
-        grid.resolution_m,
-        np.ascontiguousarray(people_local),
-        np.ascontiguousarray(xn, dtype=np.float64),
-        np.ascontiguousarray(yn, dtype=np.float64),
-        float(mount_height_m),
-        scene.wall_height_m,
-        scene.flame_height_m,
-        float(scene.person_size_m[0]),
-        float(scene.person_size_m[1]),
-        scene.person_c,
-        scene.outside_c,
-        scene.ceiling,
-        scene.layer_height_m,
-        scene.lower_fraction,
-        scene.ambient_c,
+    temps, depth = _cast_rays(
+        poses, grid, temperature_c, burning, people_xy_m, xn, yn, mount_height_m, scene
     )
-    return np.asarray(temps), np.asarray(depth)
+    return temps.transpose(0, 2, 1).copy(), depth.transpose(0, 2, 1).copy()

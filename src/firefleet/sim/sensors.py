@@ -17,6 +17,7 @@ Ground truth for an object at ``(ox, oy)`` seen from pose ``(x, y, theta)``: bea
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,7 +27,11 @@ from numpy.typing import ArrayLike
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array, check_fields
 from firefleet.perception.thermal import CameraModel, band_radiance, radiance_to_celsius
-from firefleet.sim._thermal_grid import GridThermalScene, grid_thermal_celsius
+from firefleet.sim._thermal_grid import (
+    GridThermalScene,
+    grid_thermal_celsius,
+    grid_thermal_frames,
+)
 from firefleet.world import OccupancyGrid
 
 __all__ = [
@@ -168,8 +173,13 @@ class ThermalCameraParams:
     @property
     def column_offsets_k(self) -> FloatArray:
         """The camera's column offsets [K], shape (W,)."""
-        w = self.camera.width_px
-        return np.random.default_rng(self.fpn_seed).normal(0.0, self.column_fpn_k, w)
+        return _column_offsets(self.fpn_seed, self.column_fpn_k, self.camera.width_px).copy()
+
+
+@functools.lru_cache(maxsize=16)
+def _column_offsets(seed: int, sigma_k: float, width_px: int) -> FloatArray:
+    """A camera's column offsets (drawn once per seed, spread and width)."""
+    return np.random.default_rng(seed).normal(0.0, sigma_k, width_px)
 
 
 def _hit_segments(
@@ -382,20 +392,33 @@ def render_thermal_grid_depth(
     if prm.camera.distorted:
         raise InputError("thermal_camera.camera: the grid renderer takes an undistorted camera")
     xn, yn = _ray_grid(prm)
-    temps, depth = grid_thermal_celsius(
-        poses,
-        grid,
-        temperature_c,
-        burning,
-        people_xy_m,
-        xn,
-        yn,
-        prm.mount_height_m,
-        GridThermalScene() if scene is None else scene,
-    )
     s = prm.supersample
-    n = temps.shape[0]
     h_px, w_px = prm.camera.height_px, prm.camera.width_px
+    grid_scene = GridThermalScene() if scene is None else scene
+    if prm.psf_sigma_px == 0:  # the whole camera in one compiled pass
+        n = as_float_array(poses, "poses", (None, 3)).shape[0]
+        noise = (
+            rng.normal(0.0, prm.netd_k, (n, h_px, w_px))
+            if prm.netd_k > 0
+            else np.zeros((n, h_px, w_px))
+        )
+        return grid_thermal_frames(
+            poses,
+            grid,
+            temperature_c,
+            burning,
+            people_xy_m,
+            xn,
+            yn,
+            s,
+            prm.mount_height_m,
+            grid_scene,
+            (prm.column_offsets_k, noise, prm.min_c, prm.max_c, prm.resolution_k),
+        )
+    temps, depth = grid_thermal_celsius(
+        poses, grid, temperature_c, burning, people_xy_m, xn, yn, prm.mount_height_m, grid_scene
+    )
+    n = temps.shape[0]
     radiance = band_radiance(temps).reshape(n, h_px, s, w_px, s).mean(axis=(2, 4))
     centre = depth.reshape(n, h_px, s, w_px, s)[:, :, s // 2, :, s // 2]
     return _camera_output(radiance, prm, rng), np.where(np.isfinite(centre), centre, np.nan)

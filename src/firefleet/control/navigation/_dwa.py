@@ -178,19 +178,30 @@ def _evaluate(
     w: float,
     obs: FloatArray,
     rad: FloatArray,
+    reach0: FloatArray,
     radius: float,
     horizon: float,
     n_steps: int,
 ) -> tuple[float, float]:  # pragma: no cover - compiled
-    """(clearance [m], distance before moving into contact [m]; inf if none)."""
+    """(clearance [m], distance before moving into contact [m]; inf if none).
+
+    ``obs`` and ``rad`` sorted by ``reach0``, each obstacle's clearance from the arc's
+    start (``|o - p0| - r_o``): a point of the arc ``s`` metres along it is at least
+    ``reach0 - s - radius`` from an obstacle (triangle inequality; the chord is no
+    longer than the arc), so the search of each point's nearest obstacle stops at the
+    first whose bound exceeds the nearest found: the same minimum as the full search.
+    """
     c0 = np.inf
     cmin = np.inf
     travel = np.inf
     for k in range(n_steps + 1):
         t = horizon * k / n_steps
         px, py = _arc_xy(pose[0], pose[1], pose[2], v, w, t)
+        gone = abs(v) * t + radius + 1e-9  # how far the disc's edge can be from the start's
         c = np.inf
         for m in range(obs.shape[0]):
+            if reach0[m] - gone > c:
+                break
             d = math.hypot(obs[m, 0] - px, obs[m, 1] - py) - rad[m] - radius
             c = min(c, d)
         if k == 0:
@@ -245,6 +256,14 @@ def _dwa_one(
         lo = max(w0 - b, -lim)
         hi = min(w0 + b, lim)
     wr = min(max(w_ref, lo), hi)
+    # the obstacles nearest the start first (see _evaluate)
+    reach = np.empty(obs.shape[0])
+    for m in range(obs.shape[0]):
+        reach[m] = math.hypot(obs[m, 0] - pose[0], obs[m, 1] - pose[1]) - rad[m]
+    order = np.argsort(reach, kind="mergesort")
+    obs = obs[order]
+    rad = rad[order]
+    reach = reach[order]
     best = -np.inf
     best_v = v_lo
     best_w = w0
@@ -268,7 +287,7 @@ def _dwa_one(
             count = 1
         for iw in range(count):
             w = (lo + (hi - lo) * iw / (count - 1) if hi > lo else lo) if iv < n_v else wr
-            c, travel = _evaluate(pose, v, w, obs, rad, radius, horizon, n_steps)
+            c, travel = _evaluate(pose, v, w, obs, rad, reach, radius, horizon, n_steps)
             if travel != np.inf and v > math.sqrt(2.0 * aw * travel) + 1e-12:
                 # inadmissible; remembered in case nothing is: the slowest, then the
                 # clearest

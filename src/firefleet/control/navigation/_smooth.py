@@ -15,6 +15,7 @@ The result's clearance is therefore > ``inflation_m`` at every sample (a test ch
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -37,38 +38,79 @@ def clearance_along(costmap: Costmap, xy_m: ArrayLike) -> FloatArray:
     return np.where(inside, costmap.clearance_m[r, c], 0.0)
 
 
-def _segment_samples(a: FloatArray, b: FloatArray, step: float) -> FloatArray:
-    n = max(int(np.ceil(np.hypot(*(b - a)) / step)), 1)
-    t = np.linspace(0.0, 1.0, n + 1)[:, None]
-    return np.asarray(a + t * (b - a))
+@numba.njit(cache=True)
+def _clearance_at(
+    x: float, y: float, clearance: FloatArray, origin: FloatArray, res: float
+) -> float:  # pragma: no cover - compiled
+    """:func:`clearance_along` of one point (OccupancyGrid.cell_of's arithmetic)."""
+    h, w = clearance.shape
+    col = int(np.floor((x - origin[0]) / res))
+    row = h - 1 - int(np.floor((y - origin[1]) / res))
+    if row < 0 or row >= h or col < 0 or col >= w:
+        return 0.0
+    return float(clearance[row, col])
 
 
-def shortcut(costmap: Costmap, xy_m: ArrayLike) -> FloatArray:
-    """Line-of-sight shortcutting of a path's vertices (K, 2) [m] -> (J, 2), J <= K."""
-    xy = np.asarray(xy_m, dtype=float)
-    if len(xy) <= 2:
-        return xy.copy()
-    step = costmap.grid.resolution_m / 4.0
-    own = clearance_along(costmap, xy)
-    floor = costmap.inflation_m
-    kept = [0]
+@numba.njit(cache=True)
+def _shortcut_kept(
+    xy: FloatArray, clearance: FloatArray, origin: FloatArray, res: float, floor: float
+) -> np.ndarray:  # pragma: no cover - compiled
+    """The indices of the vertices :func:`shortcut` keeps (module notes, step 1): from
+    each kept vertex, the farthest later one whose straight segment, sampled every
+    quarter cell (``np.linspace``'s points), keeps its inner samples at least as clear
+    as the path's own vertices on that stretch (and above ``floor``) and every sample
+    above ``floor``."""
+    k = xy.shape[0]
+    step = res / 4.0
+    own = np.empty(k)
+    for i in range(k):
+        own[i] = _clearance_at(xy[i, 0], xy[i, 1], clearance, origin, res)
+    kept = np.empty(k, dtype=np.int64)
+    kept[0] = 0
+    n_kept = 1
     i = 0
-    while i < len(xy) - 1:
+    while i < k - 1:
         j = i + 1
         lowest = min(own[i], own[j])
-        while j + 1 < len(xy):
+        while j + 1 < k:
             lowest_next = min(lowest, own[j + 1])
             need = max(lowest_next, floor)
-            samples = _segment_samples(xy[i], xy[j + 1], step)
-            clear = clearance_along(costmap, samples)
-            # the exact ends may sit off their cells' centres: judge the inside only
-            if np.all(clear[1:-1] >= need - 1e-9) and np.all(clear > floor):
+            ax, ay = xy[i, 0], xy[i, 1]
+            dx, dy = xy[j + 1, 0] - ax, xy[j + 1, 1] - ay
+            n = max(int(np.ceil(np.hypot(dx, dy) / step)), 1)
+            dt = 1.0 / n
+            ok = True
+            for m in range(n + 1):
+                t = 1.0 if m == n else m * dt  # np.linspace(0, 1, n + 1)
+                c = _clearance_at(ax + t * dx, ay + t * dy, clearance, origin, res)
+                # the exact ends may sit off their cells' centres: judge the inside only
+                if not c > floor or (0 < m < n and not c >= need - 1e-9):
+                    ok = False
+                    break
+            if ok:
                 j += 1
                 lowest = lowest_next
             else:
                 break
-        kept.append(j)
+        kept[n_kept] = j
+        n_kept += 1
         i = j
+    return kept[:n_kept].copy()
+
+
+def shortcut(costmap: Costmap, xy_m: ArrayLike) -> FloatArray:
+    """Line-of-sight shortcutting of a path's vertices (K, 2) [m] -> (J, 2), J <= K."""
+    xy = np.ascontiguousarray(xy_m, dtype=float)
+    if len(xy) <= 2:
+        return xy.copy()
+    grid = costmap.grid
+    kept = _shortcut_kept(
+        xy,
+        np.ascontiguousarray(costmap.clearance_m, dtype=float),
+        np.asarray(grid.origin_m, dtype=float),
+        float(grid.resolution_m),
+        float(costmap.inflation_m),
+    )
     return np.asarray(xy[kept])
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numba
 import numpy as np
 
 from firefleet._typing import FloatArray
@@ -82,13 +83,38 @@ def _near_walls(
     return out[:, :used], radius
 
 
+@numba.njit(cache=True)
 def _conflict(
     mine: FloatArray, theirs: FloatArray, me: FloatArray, gap_m: float
-) -> tuple[bool, bool]:
-    """(my path ahead meets theirs, I stand in their way)."""
-    d = np.hypot(mine[:, None, 0] - theirs[None, :, 0], mine[:, None, 1] - theirs[None, :, 1])
-    in_way = bool(np.min(np.hypot(theirs[:, 0] - me[0], theirs[:, 1] - me[1])) < gap_m)
-    return bool(d.min() < gap_m), in_way
+) -> tuple[bool, bool]:  # pragma: no cover - compiled
+    """(my path ahead meets theirs, I stand in their way): whether any of my points
+    (K, 2) lies within ``gap_m`` of any of theirs (L, 2), and whether any of theirs lies
+    within ``gap_m`` of me."""
+    in_way = False
+    for j in range(theirs.shape[0]):
+        if np.hypot(theirs[j, 0] - me[0], theirs[j, 1] - me[1]) < gap_m:
+            in_way = True
+            break
+    for i in range(mine.shape[0]):
+        for j in range(theirs.shape[0]):
+            if np.hypot(mine[i, 0] - theirs[j, 0], mine[i, 1] - theirs[j, 1]) < gap_m:
+                return True, in_way
+    return False, in_way
+
+
+@numba.njit(cache=True)
+def _clear_of(
+    xy: FloatArray, pts: FloatArray, limit: float
+) -> np.ndarray:  # pragma: no cover - compiled
+    """Whether each point of ``xy`` (C, 2) lies farther than ``limit`` from every point
+    of ``pts`` (P, 2) (all True for no points)."""
+    keep = np.ones(xy.shape[0], dtype=np.bool_)
+    for c in range(xy.shape[0]):
+        for j in range(pts.shape[0]):
+            if not np.hypot(xy[c, 0] - pts[j, 0], xy[c, 1] - pts[j, 1]) > limit:
+                keep[c] = False
+                break
+    return keep
 
 
 def _aside_spot(
@@ -115,11 +141,10 @@ def _aside_spot(
     if len(cells) == 0:
         return None
     xy = grid.center_of(cells)
-    keep = np.ones(len(xy), dtype=bool)
-    for pts in (rest, np.delete(mates, i, axis=0)):
-        for chunk in np.array_split(pts, max(len(pts) // 64, 1)):
-            d = np.hypot(xy[:, None, 0] - chunk[None, :, 0], xy[:, None, 1] - chunk[None, :, 1])
-            keep &= d.min(axis=1) > gap + params.goal_tolerance_m + 0.1
+    limit = gap + params.goal_tolerance_m + 0.1
+    keep = _clear_of(xy, np.ascontiguousarray(rest, dtype=float), limit) & _clear_of(
+        xy, np.ascontiguousarray(np.delete(mates, i, axis=0), dtype=float), limit
+    )
     xy = xy[keep]
     if len(xy) == 0:
         return None
@@ -269,17 +294,26 @@ def navigation_step(
     # give way: lower index first
     gap = 2.0 * params.robot_radius_m + params.margin_m
     ahead = round(params.yield_distance_m / _SAMPLE_M)
+    # a teammate's position and path ahead, made once (robot j's own turn, which may
+    # re-plan it, comes before any i > j asks)
+    theirs_of: dict[int, FloatArray] = {}
     for i in map(int, np.nonzero(active)[0]):
         if aside[i] >= 0:
             continue  # already on its way out of a teammate's way: it does not stop
-        mine = samples[i][index[i] : index[i] + ahead, :2]
+        mine = np.ascontiguousarray(samples[i][index[i] : index[i] + ahead, :2])
+        me = np.ascontiguousarray(pose[i, :2])
         for j in range(i):
             if not active[j] or len(mine) == 0:
                 continue
             if math.hypot(*(pose[i, :2] - pose[j, :2])) > 2.0 * params.yield_distance_m + gap:
                 continue
-            theirs = np.vstack([pose[j : j + 1, :2], samples[j][index[j] : index[j] + ahead, :2]])
-            meets, in_way = _conflict(mine, theirs, pose[i, :2], gap)
+            theirs = theirs_of.get(j)
+            if theirs is None:
+                theirs = np.vstack(
+                    [pose[j : j + 1, :2], samples[j][index[j] : index[j] + ahead, :2]]
+                )
+                theirs_of[j] = theirs
+            meets, in_way = _conflict(mine, theirs, me, gap)
             if meets and in_way and aside[i] < 0:
                 rest = np.vstack([pose[j : j + 1, :2], samples[j][index[j] :: 2, :2]])
                 spot = _aside_spot(state, params, pose, mates, i, j, rest, gap)

@@ -2,21 +2,22 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
-import scipy.ndimage as ndi
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError, check_fields
 from firefleet.perception.thermal._camera import (
     CameraModel,
 )
-from firefleet.perception.thermal._frames import check_frame, denoise, destripe
-from firefleet.perception.thermal._radiometry import band_radiance
+from firefleet.perception.thermal._detect_kernel import describe_region, filter_frame, find_regions
+from firefleet.perception.thermal._frames import check_frame, denoise
+from firefleet.perception.thermal._radiometry import _radiance_table
 
 Kind = Literal["fire", "person", "warm"]
 
@@ -277,58 +278,25 @@ def range_from_size(
     return r, r * np.sqrt(rel_size**2 + rel_angle**2)
 
 
-def _profiles(frac: FloatArray, r0: int, c0: int) -> tuple[float, float, float, float] | None:
-    """Sub-pixel centre (row, col) and extent (height, width) [px] of a fill map.
-
-    ``frac`` is the fraction of each pixel the object fills. An upright box fills
-    ``a_i b_j``: the width is the sum of the column profile (max over rows), the
-    height the sum of the row profile taken in the column nearest the centre divided
-    by that column's fill (so a slanted top edge off axis does not inflate it).
-    """
-    col_prof = frac.max(axis=0)
-    wsum = float(col_prof.sum())
-    if wsum <= 0:
-        return None
-    cc = float((np.arange(frac.shape[1]) * col_prof).sum() / wsum)
-    jc = int(np.clip(round(cc), 0, frac.shape[1] - 1))
-    row_prof = frac[:, jc] / max(float(col_prof[jc]), 1e-6)
-    row_prof = np.clip(row_prof, 0.0, 1.0)
-    hsum = float(row_prof.sum())
-    if hsum <= 0:
-        return None
-    rc = float((np.arange(frac.shape[0]) * row_prof).sum() / hsum)
-    return r0 + rc, c0 + cc, hsum, wsum
-
-
 def _measure(
-    f: FloatArray,
-    region: NDArray[np.bool_],
-    sl: tuple[slice, slice],
-    surround_c: float,
-    core_c: float,
-    camera: CameraModel,
+    stats: FloatArray, camera: CameraModel, shape: tuple[int, int], box: tuple[int, int, int, int]
 ) -> tuple[float, float, float, bool, bool]:
-    """Bearing and angular width/height of a region (sub-pixel, radiance fill fraction).
+    """Bearing and angular width/height of a region from its sub-pixel centre and extent
+    (:func:`~firefleet.perception.thermal._detect_kernel.describe_region`: the fraction of
+    each pixel the object fills in band radiance; an upright box fills ``a_i b_j``, so
+    the width is the sum of the column profile, the height that of the row profile in
+    the column nearest the centre over that column's fill).
 
     Returns (bearing [rad], angular width [rad], ``tan(top) - tan(bottom)`` of the
     elevations of its top and bottom edges, cut horizontally, cut vertically).
     """
-    h, w = f.shape
-    r0, r1 = max(sl[0].start - 1, 0), min(sl[0].stop + 1, h)
-    c0, c1 = max(sl[1].start - 1, 0), min(sl[1].stop + 1, w)
-    window = f[r0:r1, c0:c1]
-    near = ndi.binary_dilation(region[r0:r1, c0:c1], structure=np.ones((3, 3), dtype=bool))
-    l_bg = band_radiance(surround_c)
-    l_core = band_radiance(max(core_c, surround_c + 1e-3))
-    frac = np.clip((band_radiance(window) - l_bg) / (l_core - l_bg), 0.0, 1.0) * near
-    cut_h = sl[1].start == 0 or sl[1].stop == w
-    cut_v = sl[0].start == 0 or sl[0].stop == h
-    prof = _profiles(frac, r0, c0)
-    if prof is None:  # cannot happen for a region above its surround; keep the centroid
-        rows, cols = np.nonzero(region[sl])
-        rc, cc = sl[0].start + rows.mean(), sl[1].start + cols.mean()
-        return float(camera.bearing(rc, cc)), math.nan, math.nan, True, True
-    rc, cc, hpx, wpx = prof
+    h, w = shape
+    r0, c0, r1, c1 = box
+    cut_h = c0 == 0 or c1 == w
+    cut_v = r0 == 0 or r1 == h
+    if stats[7] < 0.5:  # cannot happen for a region above its surround; keep the centroid
+        return float(camera.bearing(stats[3], stats[4])), math.nan, math.nan, True, True
+    rc, cc, hpx, wpx = float(stats[8]), float(stats[9]), float(stats[10]), float(stats[11])
     x, y = camera.normalized(
         np.array([rc, rc, rc - hpx / 2, rc + hpx / 2]),
         np.array([cc - wpx / 2, cc + wpx / 2, cc, cc]),
@@ -375,6 +343,18 @@ def _size_range(
     return mean, 1.0 / math.sqrt(sum(wts))
 
 
+@functools.lru_cache(maxsize=1)
+def _default_params() -> DetectionParams:
+    """The default thresholds (made once: a robot calls :func:`detect` nine times a second)."""
+    return DetectionParams()
+
+
+@functools.lru_cache(maxsize=8)
+def _default_camera(shape: tuple[int, ...]) -> CameraModel:
+    """The default camera of a frame size (made once per size)."""
+    return CameraModel.for_frame(shape)
+
+
 def detect(
     frame_c: ArrayLike,
     *,
@@ -419,9 +399,9 @@ def detect(
     >>> len(result.detections), fire.kind, result.fire_alarm, round(fire.bearing_rad, 4)
     (1, 'fire', True, 0.0)
     """
-    p = DetectionParams() if params is None else params
+    p = _default_params() if params is None else params
     raw = check_frame(frame_c)
-    cam = CameraModel.for_frame(raw.shape) if camera is None else camera
+    cam = _default_camera(raw.shape) if camera is None else camera
     if (cam.height_px, cam.width_px) != raw.shape:
         raise InputError(
             f"camera is {cam.height_px} x {cam.width_px} px but the frame is "
@@ -432,79 +412,63 @@ def detect(
         depth = np.asarray(depth_m, dtype=np.float64)
         if depth.shape != raw.shape:
             raise InputError(f"depth_m shape {depth.shape} differs from the frame's {raw.shape}")
-    flat = destripe(raw)[0] if p.destripe else raw
-    f = denoise(flat, median_size=p.median_size, stripes=False)
-    # a fire far away may fill one or two pixels, which a median filter would erase: keep
-    # every pixel hot enough to be a fire as it was (after destriping only)
-    hot = flat >= p.fire_contrast_min_c
-    if hot.any():
-        f = np.where(hot, flat, f)
-    background = float(np.median(f))
+    flat, f = filter_frame(raw, p.destripe, 1.0, p.median_size == 3, p.fire_contrast_min_c)
+    if p.median_size != 3:  # another median (or none): SciPy's, fire-hot pixels kept
+        f = denoise(flat, median_size=p.median_size, stripes=False)
+        f = np.where(flat >= p.fire_contrast_min_c, flat, f)
     size = p.background_px if p.background_px is not None else max(15, raw.shape[1] // 3)
-    # local background: a grey opening (erosion then dilation) along each row removes
-    # every warm structure narrower than ``size`` and keeps wider ones (a band of warm
-    # wall across the view) and horizontal step edges (hot wall above a cool floor)
-    contrast = f - ndi.grey_opening(f, size=(1, size), mode="nearest")
-    fiery = f >= p.fire_contrast_min_c
-    low = (contrast >= 0.5 * p.warm_contrast_k) | fiery
-    labels, n = ndi.label(low, structure=np.ones((3, 3), dtype=bool))
-    if n == 0:
-        return FrameDetections(detections=(), background_c=background, filtered_c=f)
-    index = np.arange(1, n + 1)
-    top = np.asarray(ndi.maximum(np.where(fiery, np.inf, contrast), labels, index))
-    areas = np.asarray(ndi.sum_labels(np.ones_like(f), labels, index))
-    keep = (top >= p.warm_contrast_k) & (areas >= p.min_area_px)
-    slices = ndi.find_objects(labels)
+    background, _, low, labels, top, areas, boxes = find_regions(
+        f, p.fire_contrast_min_c, p.warm_contrast_k, int(size)
+    )
+    keep = np.flatnonzero((top >= p.warm_contrast_k) & (areas >= p.min_area_px))
     found: list[Detection] = []
-    for lab in index[keep]:
-        sl = slices[lab - 1]
-        assert sl is not None
-        found.append(_describe(f, labels, int(lab), sl, low, background, cam, p, depth))
+    if keep.size:
+        table_c, table_rad = _radiance_table((8.0, 14.0))
+        has_depth = depth is not None
+        depth_arr = depth if depth is not None else f
+        for i in keep:
+            box = (int(boxes[i, 0]), int(boxes[i, 1]), int(boxes[i, 2]), int(boxes[i, 3]))
+            stats = describe_region(
+                f,
+                labels,
+                low,
+                int(i) + 1,
+                boxes[i],
+                background,
+                p.fire_min_c,
+                p.fire_contrast_min_c,
+                p.fire_contrast_k,
+                table_c,
+                table_rad,
+                depth_arr,
+                has_depth,
+            )
+            if stats[15] > 0.5:  # band_radiance's table does not reach
+                raise InputError(f"temperatures must be finite, in [{table_c[0]}, {table_c[-1]}] C")
+            found.append(_describe(stats, box, f.shape, cam, p))
     order = {"fire": 0, "person": 1, "warm": 2}
     found.sort(key=lambda d: (order[d.kind], -d.peak_c))
     return FrameDetections(detections=tuple(found), background_c=background, filtered_c=f)
 
 
 def _describe(
-    f: FloatArray,
-    labels: NDArray[np.int32],
-    lab: int,
-    sl: tuple[slice, slice],
-    low: NDArray[np.bool_],
-    background: float,
+    stats: FloatArray,
+    box: tuple[int, int, int, int],
+    shape: tuple[int, int],
     cam: CameraModel,
     p: DetectionParams,
-    depth: FloatArray | None,
 ) -> Detection:
-    h, w = f.shape
-    region = labels == lab
-    values = f[sl][region[sl]]
-    peak, mean = float(values.max()), float(values.mean())
-    rows, cols = np.nonzero(region[sl])
-    centroid = (float(sl[0].start + rows.mean()), float(sl[1].start + cols.mean()))
-    bbox = (sl[0].start, sl[1].start, sl[0].stop, sl[1].stop)
-    ring = 3
-    outer = (
-        slice(max(sl[0].start - ring, 0), min(sl[0].stop + ring, h)),
-        slice(max(sl[1].start - ring, 0), min(sl[1].stop + ring, w)),
-    )
-    around = f[outer][~low[outer]]
-    surround = float(np.median(around)) if around.size else background
-    is_fire = peak >= p.fire_min_c or (
-        peak >= p.fire_contrast_min_c and peak - surround >= p.fire_contrast_k
-    )
-    core = peak if is_fire else float(np.percentile(values, 75))
-    bearing, ang_w, dtan_v, cut_h, cut_v = _measure(f, region, sl, surround, core, cam)
+    """A region's detection from its numbers (``describe_region``): kind, bearing, range."""
+    peak, mean, surround = float(stats[0]), float(stats[1]), float(stats[5])
+    centroid = (float(stats[3]), float(stats[4]))
+    is_fire = stats[6] > 0.5
+    bearing, ang_w, dtan_v, cut_h, cut_v = _measure(stats, cam, shape, box)
     stereo = None
-    if depth is not None:
-        d = depth[sl][region[sl]]
-        d = d[np.isfinite(d) & (d > 0)]
-        if d.size:
-            z = float(np.median(d))
-            spread = 1.4826 * float(np.median(np.abs(d - z)))
-            x, _ = cam.normalized(centroid[0], centroid[1])
-            scale = math.sqrt(1.0 + float(x) ** 2)
-            stereo = (z * scale, max(spread, p.depth_sigma_rel * z) * scale)
+    if stats[12] > 0.5:
+        z, spread = float(stats[13]), float(stats[14])
+        x, _ = cam.normalized(centroid[0], centroid[1])
+        scale = math.sqrt(1.0 + float(x) ** 2)
+        stereo = (z * scale, max(spread, p.depth_sigma_rel * z) * scale)
     kind: Kind
     rng: tuple[float, float] | None
     if is_fire:
@@ -544,10 +508,10 @@ def _describe(
     return Detection(
         kind=kind,
         centroid_rc=centroid,
-        bbox_rc=bbox,
+        bbox_rc=box,
         peak_c=peak,
         mean_c=mean,
-        area_px=int(values.size),
+        area_px=int(stats[2]),
         surround_c=surround,
         bearing_rad=bearing,
         angular_width_rad=ang_w if not cut_h else math.nan,

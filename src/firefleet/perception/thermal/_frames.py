@@ -227,6 +227,32 @@ def denoise(
 
 
 @numba.njit(cache=True)
+def _select(buf: FloatArray, m: int, k: int) -> float:  # pragma: no cover - compiled
+    """The ``k``-th smallest of ``buf[:m]`` (Hoare's quickselect, in place: afterwards
+    ``buf[:k]`` holds the ``k`` smallest)."""
+    lo, hi = 0, m - 1
+    while lo < hi:
+        pivot = buf[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while buf[i] < pivot:
+                i += 1
+            while buf[j] > pivot:
+                j -= 1
+            if i <= j:
+                buf[i], buf[j] = buf[j], buf[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break
+    return float(buf[k])
+
+
+@numba.njit(cache=True)
 def _column_steps(f: FloatArray, max_step: float) -> FloatArray:  # pragma: no cover - compiled
     """Per pair of neighbouring columns, the median of their differences below
     ``max_step`` in magnitude (NumPy's nanmedian of the masked differences: the mean of
@@ -243,36 +269,58 @@ def _column_steps(f: FloatArray, max_step: float) -> FloatArray:  # pragma: no c
                 m += 1
         if m == 0:
             continue
-        part = buf[:m]
-        part.sort()
+        k = m // 2
+        upper = _select(buf, m, k)
         if m % 2 == 1:
-            steps[c] = part[m // 2]
+            steps[c] = upper
         else:
-            steps[c] = 0.5 * (part[m // 2 - 1] + part[m // 2])
+            lower = buf[0]
+            for i in range(1, k):
+                lower = max(lower, buf[i])
+            steps[c] = 0.5 * (lower + upper)
     return steps
+
+
+@numba.njit(cache=True, inline="always")
+def _sort3(a: float, b: float, c: float) -> tuple[float, float, float]:  # pragma: no cover
+    if a > b:
+        a, b = b, a
+    if b > c:
+        b, c = c, b
+    if a > b:
+        a, b = b, a
+    return a, b, c
+
+
+@numba.njit(cache=True, inline="always")
+def _med3(a: float, b: float, c: float) -> float:  # pragma: no cover - compiled
+    return max(min(a, b), min(max(a, b), c))
 
 
 @numba.njit(cache=True)
 def _median3_nearest(f: FloatArray) -> FloatArray:  # pragma: no cover - compiled
-    """3 x 3 median with the edge pixels repeated (scipy.ndimage's ``mode="nearest"``)."""
+    """3 x 3 median with the edge pixels repeated (scipy.ndimage's ``mode="nearest"``).
+
+    Each pixel's three columns of three are sorted; the median of the nine is the
+    median of (the largest of the three minima, the median of the three medians, the
+    smallest of the three maxima) (A. Paeth, Graphics Gems, 1990): one of the nine
+    values, exactly.
+    """
     h, w = f.shape
     out = np.empty_like(f)
-    win = np.empty(9)
+    lo = np.empty(w)
+    mid = np.empty(w)
+    hi = np.empty(w)
     for r in range(h):
+        ra, rb = max(r - 1, 0), min(r + 1, h - 1)
         for c in range(w):
-            k = 0
-            for dr in range(-1, 2):
-                rr = min(max(r + dr, 0), h - 1)
-                for dc in range(-1, 2):
-                    cc = min(max(c + dc, 0), w - 1)
-                    v = f[rr, cc]
-                    j = k  # insertion sort as the window fills
-                    while j > 0 and win[j - 1] > v:
-                        win[j] = win[j - 1]
-                        j -= 1
-                    win[j] = v
-                    k += 1
-            out[r, c] = win[4]
+            lo[c], mid[c], hi[c] = _sort3(f[ra, c], f[r, c], f[rb, c])
+        for c in range(w):
+            ca, cb = max(c - 1, 0), min(c + 1, w - 1)
+            a = max(max(lo[ca], lo[c]), lo[cb])
+            b = _med3(mid[ca], mid[c], mid[cb])
+            d = min(min(hi[ca], hi[c]), hi[cb])
+            out[r, c] = _med3(a, b, d)
     return out
 
 

@@ -88,6 +88,15 @@ def lower_layer(field_c: FloatArray, ambient_c: float) -> FloatArray:
     return np.asarray(ambient_c + LOWER_LAYER * (np.asarray(field_c, dtype=float) - ambient_c))
 
 
+def _evolve(state: MissionWorldState, **changes: Any) -> MissionWorldState:
+    """``dataclasses.replace`` without re-running the constructor (the loop's ticks
+    between world steps change the time only; a hundred times a second)."""
+    new = object.__new__(type(state))
+    new.__dict__.update(state.__dict__)
+    new.__dict__.update(changes)
+    return new
+
+
 def nearest_open(grid: OccupancyGrid, xy_m: FloatArray) -> tuple[int, int]:
     """The open cell of ``grid`` nearest to a point (the point's own when open)."""
     rc = grid.cell_of(np.asarray(xy_m, dtype=float))
@@ -230,7 +239,7 @@ class MissionWorld:
     def step(self, state: MissionWorldState, t_s: float) -> MissionWorldState:
         """The world at ``t_s`` (it changes every ``world_step_s``)."""
         if t_s < state.next_s - 1e-9:
-            return dataclasses.replace(state, t_s=t_s)
+            return _evolve(state, t_s=t_s)
         dt = self.world_step_s
         fire = state.fire
         started = state.started
@@ -317,11 +326,11 @@ class MissionWorld:
             log["detections"].append(np.asarray(det))
         if "explored_pct" in actions:
             log["explored_pct"] = float(np.asarray(actions["explored_pct"]))
-        return dataclasses.replace(
+        return _evolve(
             state,
             spray=np.asarray(actions.get("spray", state.spray), dtype=bool),
             refill=np.asarray(actions.get("refill", state.refill), dtype=bool),
-            pose=np.asarray(pose, dtype=float).copy(),
+            pose=np.array(pose, dtype=float),
         )
 
     def final(self, state: MissionWorldState) -> Messages:
@@ -387,16 +396,21 @@ class MissionSensors:
             out.update(self.ranging.read(world, drive))
         field = self.world.field
         h, w = field.shape
-        rc = field.cell_of(drive.pose[:, :2])
-        out["air_c"] = lower_layer(
-            world.temperature_c[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)],
-            HEAT.ambient,
+        pose = drive.pose
+        # field.cell_of's arithmetic, clipped to the grid, without its generality
+        col = np.floor((pose[:, 0] - field.origin_m[0]) / field.resolution_m).astype(np.int64)
+        row = (
+            h - 1 - np.floor((pose[:, 1] - field.origin_m[1]) / field.resolution_m).astype(np.int64)
         )
+        air = world.temperature_c[
+            np.minimum(np.maximum(row, 0), h - 1), np.minimum(np.maximum(col, 0), w - 1)
+        ]
+        out["air_c"] = HEAT.ambient + LOWER_LAYER * (air - HEAT.ambient)  # lower_layer()
         out["tank_l"] = np.asarray(world.tank_l, dtype=float)
-        out["damaged"] = np.asarray(world.damaged, dtype=float)
+        out["damaged"] = world.damaged.astype(float)
         k = round(world.t_s / self.dt_s)
         looked = k % self.every == 0
-        out["looked"] = np.full(drive.pose.shape[0], float(looked))
+        out["looked"] = np.full(pose.shape[0], float(looked))
         if not looked:
             out["thermal_detections"] = np.zeros((0, 5))
             return out

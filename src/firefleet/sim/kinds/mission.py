@@ -235,6 +235,8 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
 
 def _on_map(rows: FloatArray, pose: FloatArray, kind: int) -> tuple[FloatArray, np.ndarray]:
     """Detections of one kind placed on the map by the robots' pose estimates."""
+    if not rows.shape[0]:  # most ticks: no frame, nothing to place
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
     pick = rows[rows[:, 1] == kind]
     robot = pick[:, 0].astype(np.int64)
     heading = pose[robot, 2] + pick[:, 2]

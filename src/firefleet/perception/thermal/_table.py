@@ -1,0 +1,107 @@
+"""``np.interp`` on the radiance tables, compiled and scalar (for the kernels that convert
+temperature to band radiance and back pixel by pixel: the detector's fill fractions, the
+simulated camera). NumPy's formula and special cases, so NumPy's result bit for bit
+(tests/perception/test_detect_kernel.py)."""
+
+from __future__ import annotations
+
+import numba
+
+from firefleet._typing import FloatArray
+
+__all__ = ["interp_sorted", "interp_sorted_from", "interp_table"]
+
+
+@numba.njit(cache=True)
+def interp_table(x: float, xp: FloatArray, fp: FloatArray) -> float:  # pragma: no cover - compiled
+    """``np.interp(x, xp, fp)`` for a table of equal steps and ``xp[0] <= x <= xp[-1]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal._table import interp_table
+    >>> xp = np.arange(0.0, 10.25, 0.25)
+    >>> float(interp_table(3.1, xp, xp**2)) == float(np.interp(3.1, xp, xp**2))
+    True
+    """
+    if x >= xp[-1]:
+        return float(fp[-1])
+    step = (xp[-1] - xp[0]) / (xp.size - 1)
+    j = min(max(int((x - xp[0]) / step), 0), xp.size - 2)
+    while j > 0 and xp[j] > x:
+        j -= 1
+    while j < xp.size - 2 and xp[j + 1] <= x:
+        j += 1
+    if xp[j] == x:
+        return float(fp[j])
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    return float(slope * (x - xp[j]) + fp[j])
+
+
+@numba.njit(cache=True)
+def interp_sorted(x: float, xp: FloatArray, fp: FloatArray) -> float:  # pragma: no cover - compiled
+    """``np.interp(x, xp, fp)`` for strictly increasing ``xp`` (bisection), clamped to
+    ``fp[0]`` and ``fp[-1]`` outside.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal._table import interp_sorted
+    >>> xp = np.array([0.0, 1.0, 4.0, 9.0])
+    >>> [float(interp_sorted(v, xp, np.sqrt(xp))) for v in (-1.0, 2.5, 9.0, 20.0)]
+    [0.0, 1.5, 3.0, 3.0]
+    """
+    n = xp.size
+    if x >= xp[n - 1]:
+        return float(fp[n - 1])
+    if x < xp[0]:
+        return float(fp[0])
+    lo, hi = 0, n - 1  # xp[lo] <= x < xp[hi]
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    if xp[lo] == x:
+        return float(fp[lo])
+    slope = (fp[lo + 1] - fp[lo]) / (xp[lo + 1] - xp[lo])
+    return float(slope * (x - xp[lo]) + fp[lo])
+
+
+@numba.njit(cache=True)
+def interp_sorted_from(
+    x: float, xp: FloatArray, fp: FloatArray, lo: int, hi: int
+) -> float:  # pragma: no cover - compiled
+    """:func:`interp_sorted` with the search started in ``xp[lo:hi + 1]`` (cheap when the
+    answer lies there; the same result wherever it lies).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.perception.thermal._table import interp_sorted_from
+    >>> xp = np.array([0.0, 1.0, 4.0, 9.0])
+    >>> [float(interp_sorted_from(2.5, xp, np.sqrt(xp), g, g + 1)) for g in (0, 1, 2)]
+    [1.5, 1.5, 1.5]
+    """
+    n = xp.size
+    if x >= xp[n - 1]:
+        return float(fp[n - 1])
+    if x < xp[0]:
+        return float(fp[0])
+    lo = min(max(lo, 0), n - 2)
+    hi = min(max(hi, lo + 1), n - 1)
+    if xp[lo] > x:
+        lo = 0
+    if xp[hi] <= x:
+        hi = n - 1
+    while hi - lo > 1:  # xp[lo] <= x < xp[hi]
+        mid = (lo + hi) // 2
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    if xp[lo] == x:
+        return float(fp[lo])
+    slope = (fp[lo + 1] - fp[lo]) / (xp[lo + 1] - xp[lo])
+    return float(slope * (x - xp[lo]) + fp[lo])
