@@ -239,10 +239,11 @@ class MissionWorld:
             return
         log["snap_t"].append(t_s)
         log["fire_state"].append(state.fire.state.astype(np.int8))
-        # 0.01 C (below the camera's NETD) and float16 smoke: the untouched floor then
-        # compresses to nothing in result.npz (mission-large: 400 x 400 cells a second)
+        # 0.01 C (below the camera's NETD) and smoke to 0.01 /m in float16: the floor the
+        # fire has not touched compresses to nothing in result.npz (mission-large, 1200 s
+        # of 400 x 400 cells: temperature 768 -> 123 MB, smoke 768 -> 65 MB)
         log["temperature_c"].append(np.round(state.temperature_c, 2).astype(np.float32))
-        log["smoke_per_m"].append(state.smoke_per_m.astype(np.float16))
+        log["smoke_per_m"].append(np.round(state.smoke_per_m, 2).astype(np.float16))
         log["next_record_s"] = log["next_record_s"] + self.record_s
 
     def step(self, state: MissionWorldState, t_s: float) -> MissionWorldState:
