@@ -78,6 +78,11 @@ def test_the_issue_yaml_validates_as_printed(tmp_path: Path) -> None:
             "sensors.thermal",
         ),
         (
+            "robots: true",
+            "robots: true\n  refill_m: [4.0, 2.0]",
+            "command.refill_m: (4, 2) is inside a wall of map 'office'",
+        ),
+        (
             "sensors: {thermal: {}, ultrasonic: {count: 8}}",
             "sensors: {thermal: {}, ultrasonic: {count: 8}, pt100: {time_constant_s: 0}}",
             "sensors.pt100.time_constant_s: expected > 0, got 0.0",

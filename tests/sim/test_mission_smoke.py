@@ -19,7 +19,14 @@ import firefleet
 from firefleet.sim.kinds.mission import METRIC_NAMES, mission_metrics, mission_world
 from firefleet.world import SMOKE
 
-SMOKY = Path(__file__).resolve().parents[2] / "examples" / "missions" / "mission-smoke.yaml"
+SMOKY = (
+    Path(__file__).resolve().parents[2]
+    / "src"
+    / "firefleet"
+    / "scenarios"
+    / "builtin"
+    / "mission-smoke.yaml"
+)
 
 
 def test_a_bad_perception_is_one_line_exit_2(tmp_path: Path) -> None:

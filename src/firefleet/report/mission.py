@@ -97,10 +97,18 @@ def overview_png(result: SimResult, metrics: dict[str, Any]) -> bytes:
     for cell in world.fire_cells:
         ax.plot(*world.field.center_of(cell), "^", color="red", mec="k", ms=9)
     _people(ax, world, np.asarray(x["victims_found_s"]), float(result.t[-1]))
+    n_people = world.victim_xy_m.shape[0]
+    stereo = float(metrics.get("stereo_victims_found", np.nan))
     ax.set_title(
         f"{result.scenario.name}: burned {metrics['burned_area_m2']:.0f} m^2 "
         f"(without the team {metrics['baseline_burned_area_m2']:.0f}); people found "
-        f"{metrics['victims_found']:.0f} of {world.victim_xy_m.shape[0]}",
+        f"{metrics['victims_found']:.0f} of {n_people}"
+        + (
+            f"\n(tracks: the thermal team; a stereo-only team in the same world found "
+            f"{stereo:.0f} of {n_people})"
+            if np.isfinite(stereo)
+            else ""
+        ),
         fontsize=9,
     )
     t = np.asarray(x["field_t_s"])

@@ -180,6 +180,11 @@ class Mission:
     arrive_s : float
         When the team enters [s]: until then the robots wait at their poses while the
         fire burns (a fire brigade arrives minutes after the ignition).
+    refill_m : (x_m, y_m) or None
+        Where tanks are refilled [m]: a standpipe's hose valve or a fire hose cabinet
+        on the floor (building codes place them so that a hose reaches every point of
+        the storey: NFPA 14, EN 671). ``None``: the centroid of the start poses (the
+        brigade's water at the entrance). Off the map or in a wall: refused.
 
     Examples
     --------
@@ -201,6 +206,7 @@ class Mission:
     perception: Literal["thermal", "stereo"] = "thermal"
     stereo_team: bool = False
     arrive_s: float = 0.0
+    refill_m: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         check_fields(

@@ -280,6 +280,11 @@ def check_world(
         why = _where_blocked(grid, (pose[0], pose[1]))
         if why is not None:
             raise InputError(f"poses[{i}]: ({pose[0]:g}, {pose[1]:g}) {why} of map {world.map!r}")
+    if mission is not None and mission.refill_m is not None:
+        why = _where_blocked(grid, mission.refill_m)
+        if why is not None:
+            x, y = mission.refill_m
+            raise InputError(f"command.refill_m: ({x:g}, {y:g}) {why} of map {world.map!r}")
     if navigate is None:
         return
     for i, goal in enumerate(navigate.goals_m):
