@@ -4,6 +4,8 @@ obstacle), on random teams among random walls, range returns and teammates."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -12,7 +14,7 @@ from firefleet.control.navigation._dwa import DwaParams, _dwa_batch
 from ._dwa_reference import _dwa_batch as _dwa_batch_reference
 
 
-def _args(params: DwaParams, dt_s: float) -> tuple[float, ...]:
+def _args(params: DwaParams, dt_s: float) -> tuple[Any, ...]:
     return (
         dt_s,
         params.wheel_speed_max_m_s,
