@@ -53,6 +53,19 @@ def clearance_cells(occupied: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def axis_step(p: float, cell: int, d: float) -> tuple[int, float, float]:
+    """One axis of Amanatides and Woo's grid walk (1987): from the continuous coordinate
+    ``p`` [cells] in ``cell``, moving ``d`` per unit of the ray's parameter, the step
+    (-1, 0, 1), the parameter of the first cell boundary crossed and the parameter
+    between two crossings (``inf`` for a ray along the other axis)."""
+    if d > 0.0:
+        return 1, (cell + 1 - p) / d, 1.0 / d
+    if d < 0.0:
+        return -1, (p - cell) / -d, -1.0 / d
+    return 0, math.inf, math.inf
+
+
+@numba.njit(cache=True)
 def _disc_hit(
     x: float, y: float, dx: float, dy: float, cx: float, cy: float, r: float
 ) -> tuple[float, float]:
@@ -121,19 +134,10 @@ def _nearest_disc(
     vt = v + t * dy
     i = min(max(math.floor(ut), 0), nx - 1)
     j = min(max(math.floor(vt), 0), ny - 1)
-    inf = math.inf
-    if dx > 0.0:
-        step_i, t_next_i, dt_i = 1, t + (i + 1 - ut) / dx, 1.0 / dx
-    elif dx < 0.0:
-        step_i, t_next_i, dt_i = -1, t + (ut - i) / -dx, -1.0 / dx
-    else:
-        step_i, t_next_i, dt_i = 0, inf, inf
-    if dy > 0.0:
-        step_j, t_next_j, dt_j = 1, t + (j + 1 - vt) / dy, 1.0 / dy
-    elif dy < 0.0:
-        step_j, t_next_j, dt_j = -1, t + (vt - j) / -dy, -1.0 / dy
-    else:
-        step_j, t_next_j, dt_j = 0, inf, inf
+    step_i, t_next_i, dt_i = axis_step(ut, i, dx)
+    step_j, t_next_j, dt_j = axis_step(vt, j, dy)
+    t_next_i += t
+    t_next_j += t
     while 0 <= i < nx and 0 <= j < ny and t <= t1:
         k = j * nx + i
         for q in range(starts[k], starts[k + 1]):
@@ -235,18 +239,8 @@ def cast_ray(
     v = (y - origin_y_m) / resolution_m  # continuous row counted from the bottom
     i = math.floor(u)
     j = math.floor(v)
-    if dx > 0.0:
-        step_i, t_next_i, dt_i = 1, (i + 1 - u) / dx, 1.0 / dx
-    elif dx < 0.0:
-        step_i, t_next_i, dt_i = -1, (u - i) / -dx, -1.0 / dx
-    else:
-        step_i, t_next_i, dt_i = 0, math.inf, math.inf
-    if dy > 0.0:
-        step_j, t_next_j, dt_j = 1, (j + 1 - v) / dy, 1.0 / dy
-    elif dy < 0.0:
-        step_j, t_next_j, dt_j = -1, (v - j) / -dy, -1.0 / dy
-    else:
-        step_j, t_next_j, dt_j = 0, math.inf, math.inf
+    step_i, t_next_i, dt_i = axis_step(u, i, dx)
+    step_j, t_next_j, dt_j = axis_step(v, j, dy)
     t = 0.0
     face = -1  # -1: the start cell, 0: entered across a vertical face, 1: a horizontal one
     while t <= limit:

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array
+from firefleet.sim._ranging_cast import axis_step
 from firefleet.world import OccupancyGrid
 
 __all__ = [
@@ -165,18 +166,8 @@ def smoke_walk(
     v = (y - origin_y_m) / resolution_m
     i = math.floor(u)
     j = math.floor(v)
-    if dx > 0.0:
-        step_i, t_next_i, dt_i = 1, (i + 1 - u) / dx, 1.0 / dx
-    elif dx < 0.0:
-        step_i, t_next_i, dt_i = -1, (u - i) / -dx, -1.0 / dx
-    else:
-        step_i, t_next_i, dt_i = 0, math.inf, math.inf
-    if dy > 0.0:
-        step_j, t_next_j, dt_j = 1, (j + 1 - v) / dy, 1.0 / dy
-    elif dy < 0.0:
-        step_j, t_next_j, dt_j = -1, (v - j) / -dy, -1.0 / dy
-    else:
-        step_j, t_next_j, dt_j = 0, math.inf, math.inf
+    step_i, t_next_i, dt_i = axis_step(u, i, dx)
+    step_j, t_next_j, dt_j = axis_step(v, j, dy)
     limit = length_m / resolution_m  # in cells
     t = 0.0
     tau = 0.0
