@@ -22,6 +22,8 @@ the device works:
 
 The probe's temperature is physics (heat flowing into the sheath) and is stepped with
 the world; the reading is the sensor's.
+The robot's adapter for the real converter (:mod:`firefleet.robot`, SPI) reads its codes
+through the same Callendar-Van Dusen functions.
 
 References
 ----------

@@ -32,11 +32,9 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from firefleet.errors import InputError
+from firefleet.models.pt100 import pt100_resistance_ohm, pt100_temperature_c
 
 __all__ = ["FakeMax31865", "Pt100", "Pt100Reading", "cvd_resistance_ohm", "cvd_temperature_c"]
-
-A, B, C = 3.9083e-3, -5.775e-7, -4.183e-12
-R0_OHM = 100.0
 
 CONFIG, RTD_MSB, FAULT_STATUS = 0x00, 0x01, 0x07
 WRITE = 0x80
@@ -44,7 +42,8 @@ VBIAS, AUTO, THREE_WIRE, FAULT_CLEAR, FILTER_50HZ = 0x80, 0x40, 0x10, 0x02, 0x01
 
 
 def cvd_resistance_ohm(temperature_c: float) -> float:
-    """A PT100's resistance at a temperature (IEC 60751) [ohm].
+    """A PT100's resistance at a temperature (IEC 60751) [ohm]: the scalar of
+    :func:`firefleet.models.pt100.pt100_resistance_ohm`.
 
     Examples
     --------
@@ -52,15 +51,13 @@ def cvd_resistance_ohm(temperature_c: float) -> float:
     >>> round(cvd_resistance_ohm(100.0), 2), round(cvd_resistance_ohm(-100.0), 2)  # IEC table
     (138.51, 60.26)
     """
-    t = temperature_c
-    r = 1.0 + A * t + B * t * t
-    if t < 0.0:
-        r += C * (t - 100.0) * t**3
-    return R0_OHM * r
+    return float(pt100_resistance_ohm(temperature_c))
 
 
 def cvd_temperature_c(resistance_ohm: float) -> float:
-    """The temperature of a PT100 of this resistance (IEC 60751 inverted) [deg C].
+    """The temperature of a PT100 of this resistance (IEC 60751 inverted) [deg C]: the
+    scalar of :func:`firefleet.models.pt100.pt100_temperature_c`; NaN for a resistance
+    that is not a positive number.
 
     Examples
     --------
@@ -70,18 +67,7 @@ def cvd_temperature_c(resistance_ohm: float) -> float:
     """
     if not (math.isfinite(resistance_ohm) and resistance_ohm > 0.0):
         return math.nan
-    ratio = resistance_ohm / R0_OHM
-    t = (-A + math.sqrt(A * A - 4.0 * B * (1.0 - ratio))) / (2.0 * B)
-    if t >= 0.0:
-        return t
-    for _ in range(20):  # Newton on the full equation below 0 deg C
-        f = cvd_resistance_ohm(t) - resistance_ohm
-        df = R0_OHM * (A + 2.0 * B * t + C * (4.0 * t**3 - 300.0 * t * t))
-        step = f / df
-        t -= step
-        if abs(step) < 1e-9:
-            break
-    return t
+    return float(pt100_temperature_c(resistance_ohm))
 
 
 class Spi(Protocol):
