@@ -319,9 +319,7 @@ class MissionWorld:
             voltage_scale=np.where(damaged, 0.0, 1.0) if damaged.any() else None,
             next_s=state.next_s + dt,
             probe_c=probe,
-            pt100_c=(
-                pt100_read(probe, self.pt100) if probe is not state.probe_c else state.pt100_c
-            ),
+            pt100_c=pt100_read(probe, self.pt100),  # a conversion every world step
             started=started,
         )
         self._snapshot(new, t_s)
