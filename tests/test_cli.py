@@ -181,6 +181,13 @@ def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[s
         len(load_scenario(n).claims) for n in builtin_names() if load_scenario(n).reproduces
     )
     documents = [json.loads(p.read_text()) for p in out.glob("*/metrics.json")]
+    missions = [n for n in builtin_names() if load_scenario(n).command.kind == "mission"]
+    assert missions  # their claims are checked here only (tests/sim/test_engine.py)
+    for name in missions:
+        doc = json.loads((out / name / "metrics.json").read_text())
+        assert set(load_scenario(name).metric_names) <= set(doc)
+        assert doc["claims"]
+        assert all(c["passed"] for c in doc["claims"]), doc["claims"]
     total = sum(len(d["claims"]) for d in documents)
     assert total > scenario_claims >= 25
     assert f"{total} of {total} claims passed" in index
