@@ -121,16 +121,20 @@ def test_unreachable_and_blocked_ends_are_reported() -> None:
     assert res.xy_m[-1].tolist() == [0.5, 2.5]
 
 
-def test_inflation_is_an_exact_disc() -> None:
-    occ = np.zeros((41, 41), dtype=bool)
-    occ[20, 20] = True
+def test_inflation_is_an_exact_disc_and_the_outside_a_wall() -> None:
+    occ = np.zeros((61, 61), dtype=bool)
+    occ[30, 30] = True
     cm = build_costmap(OccupancyGrid(occ, ~occ, 0.05), inflation_m=0.5)
-    rr, cc = np.mgrid[:41, :41]
-    centre_distance = 0.05 * np.hypot(rr - 20, cc - 20)
-    assert np.array_equal(cm.blocked, centre_distance <= 0.5)
+    rr, cc = np.mgrid[:61, :61]
+    centre_distance = 0.05 * np.hypot(rr - 30, cc - 30)
+    # the map's outside is occupied too: one cell beyond each edge
+    edge_distance = 0.05 * (np.minimum(np.minimum(rr, cc), np.minimum(60 - rr, 60 - cc)) + 1)
+    assert np.array_equal(cm.blocked, (centre_distance <= 0.5) | (edge_distance <= 0.5))
+    assert cm.blocked[30, 9]  # 10 cells from the outside
+    assert not cm.blocked[30, 10]  # 11 cells
     # the wall cost falls off with the clearance and is 1 + weight at the edge
     assert np.all(np.isinf(cm.cost[cm.blocked]))
-    assert cm.cost[20, 31] == pytest.approx(1.0 + 2.0 * math.exp(-(0.55 - 0.5) / 0.1))
+    assert cm.cost[30, 41] == pytest.approx(1.0 + 2.0 * math.exp(-(0.55 - 0.5) / 0.1))
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -40,7 +40,7 @@ class Costmap:
         The map it was built from (the cell <-> metre conversion).
     clearance_m : ndarray, shape (H, W)
         Distance from each cell's centre to the nearest non-free cell's centre [m]
-        (0 on non-free cells).
+        (0 on non-free cells); the map's outside counts as non-free.
     blocked : ndarray of bool, shape (H, W)
         Cells the robot's centre may not enter: ``clearance_m <= inflation_m``.
     cost : ndarray, shape (H, W)
@@ -88,10 +88,10 @@ def build_costmap(
     >>> occ = np.zeros((5, 7), dtype=bool)
     >>> occ[:, 0] = True  # a wall down the left edge
     >>> cm = build_costmap(OccupancyGrid(occ, ~occ, 0.1), inflation_m=0.15)
-    >>> cm.clearance_m[2].round(2).tolist()
-    [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
+    >>> cm.clearance_m[2].round(2).tolist()  # off the map counts as a wall
+    [0.0, 0.1, 0.2, 0.3, 0.3, 0.2, 0.1]
     >>> cm.blocked[2].tolist()
-    [True, True, False, False, False, False, False]
+    [True, True, False, False, False, False, True]
     """
     if not (np.isfinite(inflation_m) and inflation_m >= 0.0):
         raise InputError(f"inflation_m must be a number of metres >= 0, got {inflation_m!r}")
@@ -99,11 +99,10 @@ def build_costmap(
         raise InputError(f"wall_weight must be >= 0, got {wall_weight!r}")
     if not (np.isfinite(wall_decay_m) and wall_decay_m > 0.0):
         raise InputError(f"wall_decay_m must be > 0, got {wall_decay_m!r}")
-    free = np.asarray(grid.free)
-    if free.all():
-        clearance = np.full(grid.shape, np.inf)
-    else:
-        clearance = np.asarray(ndimage.distance_transform_edt(free)) * grid.resolution_m
+    # the map's outside counts as occupied (a map_server map ends where the known
+    # world does; the collision metrics count it so): one occupied cell round the map
+    free = np.pad(np.asarray(grid.free), 1, constant_values=False)
+    clearance = np.asarray(ndimage.distance_transform_edt(free))[1:-1, 1:-1] * grid.resolution_m
     blocked = clearance <= inflation_m
     with np.errstate(over="ignore"):
         extra = wall_weight * np.exp(-(np.minimum(clearance, 1e9) - inflation_m) / wall_decay_m)
