@@ -49,3 +49,38 @@ def test_mission_records_its_robots_at_ten_hertz() -> None:
     assert result.pose.shape == (12, 3, 3)
     assert result.arrays()["mode"].shape == (12, 3)
     assert np.asarray(result.extra["touched_robot"]).shape == (3,)
+
+
+def test_compiled_candidates_equal_the_grids_cells() -> None:
+    """The kernel's near-wall flags are the grid's cell lookup (NumPy, ``cell_of`` and
+    ``contains``) on points on and off the map, on cell edges too; its pair flag holds
+    whenever two points are closer than two radii."""
+    from firefleet.sim.kinds._mission_contacts import _candidates
+
+    grid = load_map("office")
+    check = ContactCheck.of(grid, 0.15)
+    rng = np.random.default_rng(0)
+    x0, x1, y0, y1 = grid.extent_m
+    pts = np.c_[rng.uniform(x0 - 1, x1 + 1, 4000), rng.uniform(y0 - 1, y1 + 1, 4000)]
+    edges = grid.center_of(np.argwhere(check.near_wall)[:500]) + 0.5 * grid.resolution_m
+    pts = np.vstack([pts, edges, edges - 0.5 * grid.resolution_m])
+    h, w = grid.shape
+    rc = grid.cell_of(pts)
+    want = (
+        ~grid.contains(pts)
+        | check.near_wall[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+    )
+    got = np.empty(len(pts), dtype=bool)
+    for k in range(0, len(pts), 50):  # teams of 50
+        team = np.ascontiguousarray(pts[k : k + 50])
+        near = np.empty(len(team), dtype=bool)
+        close = _candidates(
+            team, *map(float, grid.origin_m), grid.resolution_m, check.near_wall, 0.15, near
+        )
+        got[k : k + 50] = near
+        d = np.hypot(team[None, :, 0] - team[:, None, 0], team[None, :, 1] - team[:, None, 1])
+        np.fill_diagonal(d, np.inf)
+        assert close or not (d < 0.3).any()
+    assert got.tolist() == want.tolist()
+    assert want.any()
+    assert not want.all()

@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
@@ -78,18 +79,22 @@ class ContactCheck:
         return {"near_wall": [], "touched_robot": np.zeros(n_robots, dtype=bool)}
 
     def check(self, log: dict[str, Any], pose: FloatArray) -> None:
-        """Note the contacts of the poses (N, 3) [m, m, rad] of a tick in ``log``."""
-        xy = pose[:, :2]
-        h, w = self.grid.shape
-        rc = self.grid.cell_of(xy)
-        near = (
-            ~self.grid.contains(xy)
-            | self.near_wall[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+        """Note the contacts of the poses (N, 3) [m, m, rad] of a tick in ``log``.
+
+        A compiled pass (:func:`_candidates`) finds the robots near a wall (the same
+        cell arithmetic as :meth:`OccupancyGrid.cell_of`) and whether any two come within
+        a hair over two radii; only then does the exact pair test run (``np.hypot``, as
+        the metric's)."""
+        xy = np.ascontiguousarray(pose[:, :2], dtype=np.float64)
+        near = np.empty(xy.shape[0], dtype=np.bool_)
+        ox, oy = self.grid.origin_m
+        close = _candidates(
+            xy, float(ox), float(oy), self.grid.resolution_m, self.near_wall, self.radius_m, near
         )
         if near.any():
             idx = np.flatnonzero(near)
             log["near_wall"].append(np.c_[idx.astype(float), xy[idx]])
-        if xy.shape[0] > 1:
+        if close:
             d = np.hypot(xy[None, :, 0] - xy[:, None, 0], xy[None, :, 1] - xy[:, None, 1])
             np.fill_diagonal(d, np.inf)
             log["touched_robot"] |= (d < 2 * self.radius_m).any(axis=1)
@@ -101,6 +106,39 @@ class ContactCheck:
             "near_wall_xy_m": pts,
             "touched_robot": log["touched_robot"].astype(float),
         }
+
+
+@numba.njit(cache=True)
+def _candidates(
+    xy: FloatArray,
+    ox: float,
+    oy: float,
+    res: float,
+    near_wall: BoolArray,
+    radius_m: float,
+    near: BoolArray,
+) -> bool:  # pragma: no cover - compiled
+    """Fill ``near`` (N,): each point off the grid or in a ``near_wall`` cell (the cell
+    as :meth:`OccupancyGrid.cell_of` finds it); return whether two points lie closer than
+    two radii and a relative 1e-6 (their squared distance: a superset of the pairs the
+    exact ``np.hypot`` test can find)."""
+    h, w = near_wall.shape
+    n = xy.shape[0]
+    for i in range(n):
+        col = np.int64(math.floor((xy[i, 0] - ox) / res))
+        row = h - 1 - np.int64(math.floor((xy[i, 1] - oy) / res))
+        if 0 <= row < h and 0 <= col < w:
+            near[i] = near_wall[row, col]
+        else:
+            near[i] = True
+    reach = (2.0 * radius_m * (1.0 + 1e-6)) ** 2
+    for i in range(n):
+        for j in range(i + 1, n):
+            dx = xy[j, 0] - xy[i, 0]
+            dy = xy[j, 1] - xy[i, 1]
+            if dx * dx + dy * dy < reach:
+                return True
+    return False
 
 
 def touched_walls(
