@@ -74,9 +74,8 @@ def test_compiled_candidates_equal_the_grids_cells() -> None:
     for k in range(0, len(pts), 50):  # teams of 50
         team = np.ascontiguousarray(pts[k : k + 50])
         near = np.empty(len(team), dtype=bool)
-        close = _candidates(
-            team, *map(float, grid.origin_m), grid.resolution_m, check.near_wall, 0.15, near
-        )
+        ox, oy = (float(v) for v in grid.origin_m)
+        close = _candidates(team, ox, oy, grid.resolution_m, check.near_wall, 0.15, near)
         got[k : k + 50] = near
         d = np.hypot(team[None, :, 0] - team[:, None, 0], team[None, :, 1] - team[:, None, 1])
         np.fill_diagonal(d, np.inf)
