@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from firefleet._typing import FloatArray
+from firefleet._typing import BoolArray, FloatArray
 from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
 from firefleet.scenarios._mission import Mission
@@ -237,6 +237,23 @@ class MissionParams:
     arrive_s: float = 0.0
 
 
+@dataclass(frozen=True, eq=False)
+class MissionMemory:
+    """The decision's memory: the team's (``tactics``, a TacticsState) and the command
+    it last gave, with the damaged robots it was made for: a tick that changes neither
+    (the tactics' quiet tick, no frame, no detection) gives the same wheel references,
+    spray and refill."""
+
+    tactics: Any
+    held: WheelCommand | None = None
+    damaged: BoolArray | None = None
+
+
+_NO_XY = np.zeros((0, 2))
+_NO_ROBOT = np.zeros(0, dtype=np.int64)
+_NO_PEAK = np.zeros(0)
+
+
 def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
     from firefleet.control.mission import TacticsParams, tactics_init
     from firefleet.control.navigation import DwaParams, NavigationParams
@@ -279,7 +296,7 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
     params = MissionParams(tactics, scenario.robot, bearings, cmd.robots, cmd.arrive_s)
     if not cmd.robots:
         return None, params
-    return tactics_init(_grid(scenario), scenario.initial_poses, tactics), params
+    return MissionMemory(tactics_init(_grid(scenario), scenario.initial_poses, tactics)), params
 
 
 def _on_map(
@@ -287,8 +304,8 @@ def _on_map(
 ) -> tuple[FloatArray, np.ndarray, FloatArray]:
     """Detections of one kind placed on the map by the robots' pose estimates: (K, 2)
     positions, robots, peak readings [C]."""
-    if not rows.shape[0]:  # most ticks: no frame, nothing to place
-        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0)
+    if not rows.shape[0]:  # most ticks: no frame, nothing to place (empty: read-only)
+        return _NO_XY, _NO_ROBOT, _NO_PEAK
     pick = rows[rows[:, 1] == kind]
     robot = pick[:, 0].astype(np.int64)
     heading = pose[robot, 2] + pick[:, 2]
@@ -304,8 +321,8 @@ def mission_decide(
 
     Parameters
     ----------
-    state : TacticsState or None
-        The team's brain (None for a run without the team).
+    state : MissionMemory or None
+        The team's brain and the last command (None for a run without the team).
     inputs : DecideInputs
         The pose estimate (N, 3) and the readings: ranges, ``thermal_detections``
         (K, 5: robot, kind, bearing [rad], range [m], peak [C]), ``tank_l``,
@@ -360,13 +377,34 @@ def mission_decide(
         if "air_c" in inputs.readings
         else None,
     )
-    state, orders = tactics_step(state, obs, params.tactics, dt_s)
+    memory = state
+    held = memory.held
+    state, orders = tactics_step(memory.tactics, obs, params.tactics, dt_s)
+    if (
+        held is not None
+        and state is memory.tactics
+        and not rows.shape[0]
+        and not looked.any()
+        and np.array_equal(damaged, memory.damaged)
+    ):  # nothing new (MissionMemory): the held command, with this tick's tanks
+        return memory, WheelCommand(
+            reference_rad_s=held.reference_rad_s,
+            series={**held.series, "tank_l": tank},
+            actions=held.actions,
+        )
     v = np.where(damaged, 0.0, orders.v_m_s)
     omega = np.where(damaged, 0.0, orders.omega_rad_s)
     actions: dict[str, Any] = {
         "spray": np.asarray(orders.spray, dtype=bool),
         "refill": np.asarray(state.refilling, dtype=bool),
     }
+    reference = body_to_wheels(v, omega, params.geometry)
+    series = {
+        "mode": np.asarray(orders.mode, dtype=float),
+        "spray": np.asarray(orders.spray, dtype=float),
+        "tank_l": tank,
+    }
+    held = WheelCommand(reference_rad_s=reference, series=series, actions=dict(actions))
     if rows.shape[0]:
         both = np.concatenate(
             [
@@ -388,14 +426,8 @@ def mission_decide(
         actions["victims_confirmed_xy_m"] = np.asarray(state.victims_xy_m)[confirmed]
     if looked.any():
         actions["explored_pct"] = np.array(100.0 * state.explored_frac)
-    return state, WheelCommand(
-        reference_rad_s=body_to_wheels(v, omega, params.geometry),
-        series={
-            "mode": np.asarray(orders.mode, dtype=float),
-            "spray": np.asarray(orders.spray, dtype=float),
-            "tank_l": tank,
-        },
-        actions=actions,
+    return MissionMemory(state, held, damaged), WheelCommand(
+        reference_rad_s=reference, series=series, actions=actions
     )
 
 
