@@ -3,7 +3,7 @@
 The mission records its robots' poses at the tactics' rate (10 Hz, ``mission`` module
 notes), not at every tick: a touch between two samples would be lost. So the world
 notes at every tick, on the true poses, what the metric needs to give the answer it
-gives on poses recorded at every tick (:func:`firefleet.sim.kinds.mission._touching`):
+gives on poses recorded at every tick (:func:`firefleet.sim.kinds._mission_metrics._touching`):
 
 - two robots touch when their centres are closer than two radii: tested at once on
   the same numbers (``np.hypot`` of the same differences);
