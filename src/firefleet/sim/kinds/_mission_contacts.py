@@ -43,8 +43,8 @@ def near_wall_cells(grid: OccupancyGrid, radius_m: float) -> BoolArray:
     >>> near_wall_cells(OccupancyGrid(occ, ~occ, 1.0), 0.5)[2].astype(int).tolist()
     [1, 1, 0, 0, 0, 0, 0, 1]
 
-    The wall's column and the next (2 cells from the wall's centres: a bound of 0.59 m),
-    and the last column, by the map's edge.
+    The wall's column and the next, not the one after (2 cells from the wall's centres:
+    a bound of 0.59 m), and the last column, by the map's edge.
     """
     import scipy.ndimage as ndi
 
