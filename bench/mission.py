@@ -191,11 +191,12 @@ def _large(console: Console) -> tuple[list[Row], Floor, float, dict[str, float]]
     return rows, Floor.on(row, ">=", FLOOR_LARGE_X), wall_s, spent
 
 
-def memory(name: str | Path, duration_s: float, every_tick: bool) -> tuple[int, int]:
-    """Bytes of ``result.npz`` and the peak of the traced allocations [bytes] of
-    ``duration_s`` simulated seconds of ``name``, its metrics and its npz; ``every_tick``:
-    the robots recorded at every tick and the collisions measured on those poses (as
-    before ``ROBOT_RECORD_S``)."""
+def memory(name: str | Path, duration_s: float, every_tick: bool) -> tuple[int, int, int]:
+    """Bytes of ``result.npz``, the peak of the traced allocations [bytes] of
+    ``duration_s`` simulated seconds of ``name``, its metrics and its npz, and the bytes
+    of the robots' recorded series (the arrays with one row per recorded tick);
+    ``every_tick``: the robots recorded at every tick and the collisions measured on
+    those poses (as before ``ROBOT_RECORD_S``)."""
     import tracemalloc
 
     import firefleet
@@ -218,12 +219,17 @@ def memory(name: str | Path, duration_s: float, every_tick: bool) -> tuple[int, 
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    return size, peak
+    ticks = len(result.t)
+    robots = sum(
+        np.asarray(a).nbytes for a in result.arrays().values() if np.shape(a)[:1] == (ticks,)
+    )
+    return size, peak, robots
 
 
 def _memory_table(console: Console) -> list[Row]:
     """mission-large's result.npz and peak memory, every tick vs 10 Hz, in one run."""
     mb = 1e-6
+    memory(LARGE, 1.0, every_tick=False)  # maps, caches, kernels loaded: not in a peak
     before = memory(LARGE, MEMORY_S, every_tick=True)
     after = memory(LARGE, MEMORY_S, every_tick=False)
     per_min = 60.0 / MEMORY_S
@@ -245,6 +251,25 @@ def _memory_table(console: Console) -> list[Row]:
                 f"{after[i] * mb * per_min:.0f}",
                 "",
             )
+    # what grows with the run in memory: the recorded robot series (held by the loop's
+    # recorder, the result and the npz's buffers while it is written)
+    table.add_row(
+        "robots' series in memory, MB per simulated minute",
+        f"{before[2] * mb * per_min:.0f}",
+        f"{after[2] * mb * per_min:.1f}",
+        f"{before[2] / after[2]:.1f}",
+    )
+    for case, value in (("every_tick", before[2]), ("ten_hz", after[2])):
+        rows.append(
+            Row(
+                f"mission.large.robot_series_mb_per_min.{case}",
+                value * mb * per_min,
+                "MB",
+                False,
+                kind="memory",
+                label=f"mission-large, robots' series per simulated minute, robots {case}",
+            )
+        )
         for case, value in (("every_tick", before[i]), ("ten_hz", after[i])):
             rows.append(
                 Row(

@@ -111,3 +111,48 @@ def test_quiet_exactly_when_the_full_step_changes_nothing(
     if full is state:
         assert got is state
         assert orders is state.orders
+
+
+def test_compiled_robot_tests_equal_the_array_form() -> None:
+    """``_robots_quiet`` against the full step's array expressions (lost robots, looks at
+    a known fire, ``_tank_flags``, ``_too_hot``) on random teams."""
+    from firefleet.control.mission._params import EXPLORE, IDLE, REFILL
+    from firefleet.control.mission._plan import _empty_l
+
+    rng = np.random.default_rng(11)
+    params = TacticsParams()
+    empty_l = _empty_l(params)
+    low_l = params.low_tank_frac * params.tank_l
+    full_l = 0.98 * params.tank_l
+    quiet = 0
+    for _ in range(3000):
+        n = int(rng.integers(1, 6))
+        mode = rng.integers(0, 6, n).astype(np.int8)
+        tank = rng.choice([0.0, empty_l, 0.5 * low_l, low_l, 0.5 * params.tank_l, full_l], n)
+        alive = rng.random(n) > 0.05
+        damaged = rng.random(n) < 0.05
+        known = ~(alive & ~damaged) & (rng.random(n) < 0.9)
+        looked = rng.random(n) < 0.2
+        air = rng.choice([20.0, params.retreat_c, params.retreat_c + 1.0], n, p=[0.9, 0.05, 0.05])
+        has_air = bool(rng.random() < 0.5)
+        spots = bool(rng.random() < 0.5)
+        working = alive & ~damaged
+        idle = (mode == EXPLORE) | (mode == IDLE)
+        empty = working & (tank <= empty_l) & (mode != REFILL)
+        if spots:
+            empty |= working & idle & (tank < low_l)
+        full = (mode == REFILL) & (tank >= full_l)
+        want = not (
+            (~working & ~known).any()
+            or (spots and (working & looked).any())
+            or empty.any()
+            or full.any()
+            or (has_air and (working & (air >= params.retreat_c)).any())
+        )
+        got = step_mod._robots_quiet(
+            mode, tank, alive, damaged, known, looked, air, has_air, spots, empty_l, low_l,
+            full_l, params.retreat_c,
+        )  # fmt: skip
+        assert got == want
+        quiet += want
+    assert 100 < quiet < 2900

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numba
 import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
@@ -441,20 +442,69 @@ def _quiet(state: TacticsState, obs: TacticsObservation, params: TacticsParams) 
     n = len(state.mode)
     if np.shape(obs.pose_m) != (n, 3):
         return False
-    tank = np.asarray(obs.tank_l, dtype=float)
-    working = np.asarray(obs.alive, dtype=bool) & ~np.asarray(obs.damaged, dtype=bool)
-    if tank.shape != (n,) or working.shape != (n,) or (~working & ~state.known_damaged).any():
+    tank = np.asarray(obs.tank_l, dtype=np.float64)
+    alive = np.asarray(obs.alive, dtype=np.bool_)
+    damaged = np.asarray(obs.damaged, dtype=np.bool_)
+    if tank.shape != (n,) or alive.shape != (n,) or damaged.shape != (n,):
         return False
-    if len(state.knowledge.spot_xy_m):
-        looked = working if obs.looked is None else working & np.asarray(obs.looked, dtype=bool)
-        if looked.any():
+    looked = np.ones(n, dtype=np.bool_) if obs.looked is None else np.asarray(obs.looked)
+    air = None if obs.air_c is None else np.asarray(obs.air_c, dtype=np.float64)
+    if looked.shape != (n,) or looked.dtype != np.bool_ or (air is not None and air.shape != (n,)):
+        return False
+    return _robots_quiet(
+        state.mode,
+        tank,
+        alive,
+        damaged,
+        state.known_damaged,
+        looked,
+        np.zeros(n) if air is None else air,
+        air is not None,
+        len(state.knowledge.spot_xy_m) > 0,
+        _empty_l(params),
+        params.low_tank_frac * params.tank_l,
+        0.98 * params.tank_l,
+        params.retreat_c,
+    )
+
+
+@numba.njit(cache=True)
+def _robots_quiet(
+    mode: np.ndarray,
+    tank: FloatArray,
+    alive: BoolArray,
+    damaged: BoolArray,
+    known_damaged: BoolArray,
+    looked: BoolArray,
+    air: FloatArray,
+    has_air: bool,
+    has_spots: bool,
+    empty_l: float,
+    low_l: float,
+    full_l: float,
+    retreat_c: float,
+) -> bool:  # pragma: no cover - compiled
+    """The per-robot tests of :func:`_quiet` in one compiled pass, the comparisons of the
+    full step's (``tactics_step``'s prologue, ``_tank_flags``, ``_too_hot``): no robot
+    newly lost, no look at a known fire, no tank to send to refill or bring back, no
+    robot in air of ``retreat_c``."""
+    for i in range(mode.shape[0]):
+        working = alive[i] and not damaged[i]
+        if not working:
+            if not known_damaged[i]:
+                return False  # newly lost
+            if mode[i] == REFILL and tank[i] >= full_l:
+                return False  # back from refill (whatever its state)
+            continue
+        if has_spots and looked[i]:
+            return False  # a look that may update the knowledge
+        if mode[i] != REFILL and tank[i] <= empty_l:
             return False
-    empty, full = _tank_flags(state, tank, working, params)
-    if empty.any() or full.any():
-        return False
-    if obs.air_c is not None:
-        air = np.asarray(obs.air_c, dtype=float)
-        if (working & (air >= params.retreat_c)).any():
+        if has_spots and (mode[i] == EXPLORE or mode[i] == IDLE) and tank[i] < low_l:
+            return False
+        if mode[i] == REFILL and tank[i] >= full_l:
+            return False
+        if has_air and air[i] >= retreat_c:
             return False
     return True
 
