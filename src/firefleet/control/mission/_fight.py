@@ -65,7 +65,7 @@ def fight_goals(
 ) -> None:
     """Ring slots of every fought fire into ``goals`` (kept while its team is unchanged
     and every slot is set)."""
-    ids, fxy, fext = fires_of(state.knowledge)
+    ids, _, _ = fires_of(state.knowledge)
     reach: BoolArray | None = None
     near_m, shot_m = shot_limits_m(params)
     gap = 2.0 * params.nav.robot_radius_m + params.nav.margin_m + 0.15
@@ -87,14 +87,19 @@ def fight_goals(
                     grid, pose[:, :2], 1.0
                 )
             reach = _reachable(blocked, state.nav.costmap.grid, pose[:, :2])
-        radius = fext[j] + params.standoff_m
+        # the ring about the spots aimed at (the flames; not the hot gas, which a fire
+        # pushes metres out of its room: mission-office seed 1, a ring about the gas in
+        # the corridor put a fighter in the next room, without a shot, for 50 s)
+        aim = _aim_spots(state, fid, params)
+        centre = aim.mean(axis=0)
+        radius = float(np.hypot(*(aim - centre).T).max()) + params.standoff_m
         goals[team] = ring_slots(
             state.coarse,
             state.nav.costmap,
-            fxy[j],
+            centre,
             radius,
             pose[team, :2],
-            spots_xy_m=_aim_spots(state, fid, params),
+            spots_xy_m=aim,
             reachable=reach,
             near_m=near_m,
             shot_m=shot_m,

@@ -96,7 +96,7 @@ class TacticsParams:
         [L/m^2] (its ledger, ``_water``): the world's ``SprayParams.critical_l_m2``
         (Drysdale 2011, an energy balance); the fighters aim at flames on cells below.
     flame_guard_m : float
-        A robot does not drive on towards believed flames (not soaked) nearer than
+        A robot does not drive on towards believed flames (soaked or not) nearer than
         this, within 60 deg of its heading; it turns away (0: off) [m]
         (``_fight.flame_guard``: the air within 0.5 m of a burning cell is hotter than
         the rating).

@@ -31,7 +31,7 @@ from firefleet.control.mission._plan import (
     task_distances,
 )
 from firefleet.control.mission._team import TacticsState
-from firefleet.control.mission._water import soaked_at, spray_ledger
+from firefleet.control.mission._water import add_water, cone_cells, soaked_at, wets_flames
 from firefleet.control.navigation import (
     NavigationInputs,
     navigation_retarget,
@@ -213,6 +213,7 @@ def _orders(
     goals = state.goal_xy_m
     half = params.spray_half_angle_rad
     soaked = soaked_at(k.wet_l_m2, state.coarse, k.spot_xy_m, params.soak_l_m2)
+    wet = k.wet_l_m2
     for i in map(int, np.flatnonzero(mode == FIGHT)):
         j = np.flatnonzero(ids == state.task_fire[i])
         if len(j) == 0:
@@ -248,17 +249,23 @@ def _orders(
         if at_goal[i] or settle[i]:
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
-        spray[i] = bool(len(near)) and abs(err) <= half and obs.tank_l[i] > 0.0
+        if len(near) and abs(err) <= half and obs.tank_l[i] > 0.0:
+            # only a cone that holds dry cells at the flames (the ledger's)
+            rows, cols = cone_cells(state.coarse, pose[i], params.spray_range_m, half)
+            if wets_flames(
+                wet,
+                state.coarse,
+                rows,
+                cols,
+                spots[near],
+                params.soak_l_m2,
+                params.fire_merge_m / 2,
+            ):
+                spray[i] = True
+                wet = add_water(
+                    wet, state.coarse, rows, cols, params.flow_l_s * params.nav_period_s
+                )
     if spray.any():
-        wet = spray_ledger(
-            k.wet_l_m2,
-            state.coarse,
-            pose,
-            spray,
-            params.flow_l_s * params.nav_period_s,
-            params.spray_range_m,
-            half,
-        )
         state = replace(state, knowledge=replace(k, wet_l_m2=wet))
     if settle.any():
         nav = navigation_retarget(nav, pose[:, :2], settle)
@@ -289,7 +296,7 @@ def _orders(
             v,
             w,
             pose,
-            k.spot_xy_m[k.spot_flame & ~soaked],
+            k.spot_xy_m[k.spot_flame],
             params.flame_guard_m,
             math.radians(60.0),
             w_max,
@@ -361,13 +368,18 @@ def _tank_changes(
 def _too_hot(
     state: TacticsState,
     pose: FloatArray,
-    air_c: FloatArray,
+    air_c: FloatArray | None,
     working: BoolArray,
     params: TacticsParams,
+    near: BoolArray | None = None,
 ) -> TacticsState:
-    """A robot in air of ``retreat_c`` or more marks its place hot (once per half metre);
-    a fighter there gets a new slot at the next plan."""
-    hot = working & (air_c >= params.retreat_c)
+    """A robot in air of ``retreat_c`` or more, or seeing flames nearer than
+    ``flame_guard_m`` (``near``: its probe lags the air by seconds, its camera does
+    not), marks its place hot (once per half metre); a fighter there gets a new slot at
+    the next plan."""
+    hot = working & (air_c >= params.retreat_c) if air_c is not None else np.zeros_like(working)
+    if near is not None:
+        hot |= working & near
     if not hot.any():
         return state
     known = state.hot_xy_m
@@ -523,8 +535,19 @@ def tactics_step(
             messages_sent=state.messages_sent + len(fire_xy) + len(person_xy),
         )
     state = _tank_changes(state, pose, tank, working, params)
-    if obs.air_c is not None:
-        state = _too_hot(state, pose, np.asarray(obs.air_c, dtype=float), working, params)
+    near = np.zeros(n, dtype=bool)
+    if len(fire_xy) and params.flame_guard_m > 0.0:
+        fr = np.asarray(obs.fire_robot, dtype=np.int64)
+        flame = (
+            np.ones(len(fire_xy), dtype=bool)
+            if obs.fire_peak_c is None
+            else np.asarray(obs.fire_peak_c, dtype=float) >= params.flame_c
+        )
+        close = flame & (np.hypot(*(fire_xy - pose[fr, :2]).T) < params.flame_guard_m)
+        near[fr[close]] = True
+    if obs.air_c is not None or near.any():
+        air = None if obs.air_c is None else np.asarray(obs.air_c, dtype=float)
+        state = _too_hot(state, pose, air, working, params, near)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(
             state.coarse, pose[working], params.sensing_range_m, params.hfov_rad

@@ -25,7 +25,7 @@ import numpy as np
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap, line_of_sight
 
-__all__ = ["CRITICAL_L_M2", "cone_cells", "soaked_at", "spray_ledger"]
+__all__ = ["CRITICAL_L_M2", "add_water", "cone_cells", "soaked_at", "spray_ledger", "wets_flames"]
 
 
 CRITICAL_L_M2 = 1.3
@@ -139,3 +139,37 @@ def soaked_at(
     rc = cm.cell_of(xy)
     out: BoolArray = wet_l_m2[rc[:, 0], rc[:, 1]] >= soak_l_m2
     return out
+
+
+def add_water(
+    wet_l_m2: FloatArray, cm: CoarseMap, rows: IntArray, cols: IntArray, litres: float
+) -> FloatArray:
+    """The ledger after ``litres`` fell, split equally, on the cells (K,) of one cone
+    (a new array; (0, 0): a new ledger)."""
+    wet = np.zeros(cm.shape) if wet_l_m2.shape != cm.shape else wet_l_m2.copy()
+    if len(rows):
+        np.add.at(wet, (rows, cols), litres / (len(rows) * cm.cell_m**2))
+    return wet
+
+
+def wets_flames(
+    wet_l_m2: FloatArray,
+    cm: CoarseMap,
+    rows: IntArray,
+    cols: IntArray,
+    flames_xy_m: FloatArray,
+    soak_l_m2: float,
+    radius_m: float,
+) -> bool:
+    """Whether a cone's cells (K,) hold a cell not yet soaked within ``radius_m`` of a
+    believed flame (F, 2) [m]: the spray would do some good (a flame behind a wall
+    the cone stops at, or on cells already soaked, is no reason to spray)."""
+    f = np.asarray(flames_xy_m, dtype=float).reshape(-1, 2)
+    if len(rows) == 0 or len(f) == 0:
+        return False
+    if wet_l_m2.shape == cm.shape:
+        dry = wet_l_m2[rows, cols] < soak_l_m2
+        rows, cols = rows[dry], cols[dry]
+    xy = _centres(cm, rows, cols)
+    d = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1])
+    return bool((d <= radius_m).any())
