@@ -69,7 +69,7 @@ def fight_goals(
     reach: BoolArray | None = None
     near_m, shot_m = shot_limits_m(params)
     gap = 2.0 * params.nav.robot_radius_m + params.nav.margin_m + 0.15
-    for j, fid in enumerate(ids):
+    for fid in ids:
         team = np.flatnonzero(task_fire == fid)
         if len(team) == 0:
             continue
