@@ -95,6 +95,10 @@ class TacticsParams:
         Water per area after which the team believes a cell out and its fuel soaked
         [L/m^2] (its ledger, ``_water``): the world's ``SprayParams.critical_l_m2``
         (Drysdale 2011, an energy balance); the fighters aim at flames on cells below.
+    front_m : float
+        The fighters aim at the ledger's dry cells within this distance of the flames
+        [m]: the burning cells and the fuel the front reaches next (1 cm/s: 100 s),
+        which, soaked, no longer ignites (a firebreak; ``_water.front_aim``).
     flame_guard_m : float
         A robot does not drive on towards believed flames (soaked or not) nearer than
         this, within 60 deg of its heading; it turns away (0: off) [m]
@@ -171,6 +175,7 @@ class TacticsParams:
     flame_c: float = 300.0
     flame_guard_m: float = 0.8
     soak_l_m2: float = 1.3
+    front_m: float = 1.0
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -212,6 +217,7 @@ class TacticsParams:
                 "retreat_c",
                 "flame_c",
                 "soak_l_m2",
+                "front_m",
                 "replan_s",
                 "explore_replan_s",
                 "coverage_period_s",

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
-from firefleet.control.mission._coverage import cone_coverage, line_of_sight
+from firefleet.control.mission._coverage import cone_coverage
 from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
 from firefleet.control.mission._knowledge import fires_of, update_knowledge
 from firefleet.control.mission._params import (
@@ -31,7 +31,12 @@ from firefleet.control.mission._plan import (
     task_distances,
 )
 from firefleet.control.mission._team import TacticsState
-from firefleet.control.mission._water import add_water, cone_cells, soaked_at, wets_flames
+from firefleet.control.mission._water import (
+    add_water,
+    cone_cells,
+    front_aim,
+    wets_flames,
+)
 from firefleet.control.navigation import (
     NavigationInputs,
     navigation_retarget,
@@ -212,44 +217,42 @@ def _orders(
     shot_s = np.where((mode == FIGHT) & at_goal, state.shot_s, obs.t_s)
     goals = state.goal_xy_m
     half = params.spray_half_angle_rad
-    soaked = soaked_at(k.wet_l_m2, state.coarse, k.spot_xy_m, params.soak_l_m2)
     wet = k.wet_l_m2
     for i in map(int, np.flatnonzero(mode == FIGHT)):
         j = np.flatnonzero(ids == state.task_fire[i])
         if len(j) == 0:
             continue
-        # aim at the burning spots in reach and in sight, where the cone holds the most
-        # (a spot sprayed out is soon seen not burning and dropped: the aim sweeps on);
-        # without one, face the fire's centre
-        # flames on cells the team has not soaked yet (:mod:`._water`): water on the
-        # hot gas a fire pushes out, or on cells already out, is wasted
-        mine = (k.spot_fire == state.task_fire[i]) & k.spot_flame & ~soaked
-        spots = k.spot_xy_m[mine]
-        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
-        near = np.flatnonzero(d <= params.spray_range_m)
-        if len(near):
-            sight = line_of_sight(
-                state.coarse, np.repeat(pose[i : i + 1, :2], len(near), 0), spots[near]
-            )
-            near = near[sight]
-        if len(near):
-            rel = spots[near] - pose[i, :2]
-            bearing = np.arctan2(rel[:, 1], rel[:, 0])
-            held = (np.abs(_wrap(bearing[:, None] - bearing[None, :])) <= half).sum(axis=1)
-            best = np.lexsort((d[near], -held))[0]
-            target = spots[near[best]]
-            shot_s[i] = obs.t_s
-            # held up on its way (no closer in the navigation's stuck time) with a shot
-            # already: it stops there and sprays
-            if not at_goal[i] and obs.t_s - state.closest_s[i] >= params.nav.stuck_time_s:
-                settle[i] = True
+        # aim where the cone holds the most front cells (the ledger's dry cells within
+        # front_m of the flames: the flames and the fuel they reach next, a firebreak);
+        # water on the hot gas a fire pushes out, or on cells already soaked, is wasted;
+        # without a front cell in reach and in sight, face the fire's centre
+        spots = k.spot_xy_m[(k.spot_fire == state.task_fire[i]) & k.spot_flame]
+        aim = front_aim(
+            wet,
+            state.coarse,
+            pose[i],
+            spots,
+            params.spray_range_m,
+            half,
+            params.soak_l_m2,
+            params.front_m,
+        )
+        if aim is not None:
+            target = aim
+            d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
+            if (d <= params.spray_range_m).any():  # a flame in reach: a shot
+                shot_s[i] = obs.t_s
+                # held up on its way (no closer in the navigation's stuck time) with a
+                # shot already: it stops there and sprays
+                if not at_goal[i] and obs.t_s - state.closest_s[i] >= params.nav.stuck_time_s:
+                    settle[i] = True
         else:
             target = fxy[int(j[0])]
         err = float(_wrap(np.arctan2(target[1] - pose[i, 1], target[0] - pose[i, 0]) - pose[i, 2]))
         if at_goal[i] or settle[i]:
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
-        if len(near) and abs(err) <= half and obs.tank_l[i] > 0.0:
+        if aim is not None and abs(err) <= half and obs.tank_l[i] > 0.0:
             # only a cone that holds dry cells at the flames (the ledger's)
             rows, cols = cone_cells(state.coarse, pose[i], params.spray_range_m, half)
             if wets_flames(
@@ -257,9 +260,9 @@ def _orders(
                 state.coarse,
                 rows,
                 cols,
-                spots[near],
+                spots,
                 params.soak_l_m2,
-                params.fire_merge_m / 2,
+                params.front_m,
             ):
                 spray[i] = True
                 wet = add_water(
@@ -286,8 +289,12 @@ def _orders(
     scan = (mode == EXPLORE) & arrived
     v[scan] = 0.0
     w[scan] = params.scan_omega_rad_s
-    # refilling only by the refill point (not where a blocked path left it)
-    refilling = (mode == REFILL) & at_goal & (d_goal <= params.refill_radius_m)
+    # refilling only by the refill point (not where a blocked path left it): within
+    # refill_radius_m of it, through the robot's spot and the spot nearest the point
+    spots_r = state.refill_spots_m
+    spot_i = np.clip(state.refill_spot, 0, len(spots_r) - 1)
+    off = np.hypot(*(spots_r[spot_i] - spots_r[0]).T)
+    refilling = (mode == REFILL) & at_goal & (d_goal + off <= params.refill_radius_m)
     stop = (mode == DAMAGED) | refilling | (mode == IDLE)
     v[stop] = 0.0
     w[stop] = 0.0
@@ -345,8 +352,9 @@ def _tank_changes(
     spots = state.refill_spots_m
     for i in map(int, np.flatnonzero(empty)):
         used = np.bincount(spot[spot >= 0], minlength=len(spots))
-        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
-        spot[i] = int(np.lexsort((d, used))[0])
+        # the free spot nearest the point (spots come nearest first): one farther out,
+        # nearer the robot, leaves it refilling up to 2 refill_radius_m from the point
+        spot[i] = int(np.lexsort((np.arange(len(spots)), used))[0])
         goals[i] = spots[spot[i]]
         mode[i] = REFILL
         task_fire[i] = -1

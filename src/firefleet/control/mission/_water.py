@@ -25,7 +25,15 @@ import numpy as np
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap, line_of_sight
 
-__all__ = ["CRITICAL_L_M2", "add_water", "cone_cells", "soaked_at", "spray_ledger", "wets_flames"]
+__all__ = [
+    "CRITICAL_L_M2",
+    "add_water",
+    "cone_cells",
+    "front_aim",
+    "soaked_at",
+    "spray_ledger",
+    "wets_flames",
+]
 
 
 CRITICAL_L_M2 = 1.3
@@ -173,3 +181,65 @@ def wets_flames(
     xy = _centres(cm, rows, cols)
     d = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1])
     return bool((d <= radius_m).any())
+
+
+def front_aim(
+    wet_l_m2: FloatArray,
+    cm: CoarseMap,
+    pose: FloatArray,
+    flames_xy_m: FloatArray,
+    reach_m: float,
+    half_angle_rad: float,
+    soak_l_m2: float,
+    front_m: float,
+) -> FloatArray | None:
+    """Where a nozzle at ``pose`` should point: the cell whose bearing puts the most
+    *front* cells in the cone, or None when no front cell is in reach and in sight.
+
+    A front cell is an open cell within ``front_m`` of a believed flame (F, 2) that the
+    ledger does not hold soaked: a burning cell at the flames, or unburnt fuel the
+    front reaches next (wetting it makes a firebreak: a soaked cell no longer ignites).
+
+    Parameters
+    ----------
+    wet_l_m2 : ndarray, shape (Hc, Wc) or (0, 0)
+    cm : CoarseMap
+    pose : ndarray, shape (3,)
+    flames_xy_m : ndarray, shape (F, 2)
+    reach_m, half_angle_rad : float
+        The jet's reach [m] and the cone's half-angle [rad].
+    soak_l_m2, front_m : float
+
+    Returns
+    -------
+    ndarray, shape (2,) or None
+        The aim point [m].
+    """
+    f = np.asarray(flames_xy_m, dtype=float).reshape(-1, 2)
+    if len(f) == 0:
+        return None
+    h, w = cm.shape
+    n = math.ceil(reach_m / cm.cell_m) + 1
+    r0, c0 = (int(v) for v in cm.cell_of(np.asarray(pose[:2], dtype=float)))
+    rr, cc = np.mgrid[max(r0 - n, 0) : min(r0 + n + 1, h), max(c0 - n, 0) : min(c0 + n + 1, w)]
+    rows, cols = rr.ravel(), cc.ravel()
+    keep = cm.floor[rows, cols]
+    if wet_l_m2.shape == cm.shape:
+        keep &= wet_l_m2[rows, cols] < soak_l_m2
+    rows, cols = rows[keep], cols[keep]
+    xy = _centres(cm, rows, cols)
+    rel = xy - pose[:2]
+    dist = np.hypot(rel[:, 0], rel[:, 1])
+    near_f = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1]).min(axis=1)
+    sel = (dist <= reach_m) & (dist >= cm.cell_m) & (near_f <= front_m)
+    xy, rel = xy[sel], rel[sel]
+    if len(xy) == 0:
+        return None
+    xy = xy[line_of_sight(cm, np.repeat(pose[None, :2], len(xy), 0), xy)]
+    if len(xy) == 0:
+        return None
+    bearing = np.arctan2(xy[:, 1] - pose[1], xy[:, 0] - pose[0])
+    off = np.abs((bearing[:, None] - bearing[None, :] + np.pi) % (2 * np.pi) - np.pi)
+    held = (off <= half_angle_rad).sum(axis=1)
+    out: FloatArray = xy[int(np.argmax(held))]
+    return out
