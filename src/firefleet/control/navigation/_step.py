@@ -297,15 +297,21 @@ def navigation_step(
     # a teammate's position and path ahead, made once (robot j's own turn, which may
     # re-plan it, comes before any i > j asks)
     theirs_of: dict[int, FloatArray] = {}
+    near_by = 2.0 * params.yield_distance_m + gap
+    # pairs that may lie within near_by (squared distances, a hair of slack): the exact
+    # test below runs on those only, in the same order (50 robots: 1,225 pairs a call)
+    dx = pose[:, None, 0] - pose[None, :, 0]
+    dy = pose[:, None, 1] - pose[None, :, 1]
+    maybe = dx * dx + dy * dy <= (near_by * (1.0 + 1e-6)) ** 2
     for i in map(int, np.nonzero(active)[0]):
         if aside[i] >= 0:
             continue  # already on its way out of a teammate's way: it does not stop
         mine = np.ascontiguousarray(samples[i][index[i] : index[i] + ahead, :2])
         me = np.ascontiguousarray(pose[i, :2])
-        for j in range(i):
+        for j in map(int, np.flatnonzero(maybe[i, :i])):
             if not active[j] or len(mine) == 0:
                 continue
-            if math.hypot(*(pose[i, :2] - pose[j, :2])) > 2.0 * params.yield_distance_m + gap:
+            if math.hypot(*(pose[i, :2] - pose[j, :2])) > near_by:
                 continue
             theirs = theirs_of.get(j)
             if theirs is None:
