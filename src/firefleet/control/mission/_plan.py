@@ -238,38 +238,6 @@ def explore(
     return out
 
 
-def probe(cm: CoarseMap, covered: BoolArray, cells: IntArray, probe_m: float) -> IntArray:
-    """Goals a little past frontier cells (M, 2), into the floor not yet covered.
-
-    From each cell, along the mean direction to the uncovered floor cells within
-    ``probe_m``, the farthest standable cell within ``probe_m`` reached without crossing
-    an opaque or unstandable one (the cell itself when none is uncovered near it): the
-    robot goes into the room it is to look at, not just to its door.
-    """
-    out = np.array(cells, dtype=np.int64).reshape(-1, 2)
-    k = max(1, round(probe_m / cm.cell_m))
-    hc, wc = cm.shape
-    todo = cm.floor & ~covered
-    for m, (r, c) in enumerate(out.tolist()):
-        if r < 0:
-            continue
-        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, hc), max(c - k, 0), min(c + k + 1, wc)
-        rc = np.argwhere(todo[r0:r1, c0:c1]) + np.array([r0, c0])
-        if len(rc) == 0:
-            continue
-        u = rc.mean(axis=0) - (r, c)
-        norm = float(np.hypot(u[0], u[1]))
-        if norm < 1e-9:
-            continue
-        u = u / norm
-        for step in range(1, k + 1):
-            rr, cc = round(r + step * u[0]), round(c + step * u[1])
-            if not (0 <= rr < hc and 0 <= cc < wc) or cm.opaque[rr, cc] or not cm.standable[rr, cc]:
-                break
-            out[m] = (rr, cc)
-    return out
-
-
 def _choose(
     cm: CoarseMap, pose: FloatArray, targets: IntArray, held: IntArray, params: TacticsParams
 ) -> IntArray:
