@@ -201,7 +201,7 @@ def in_view(
     Examples
     --------
     >>> import numpy as np
-    >>> in_view(np.array([1.0, 2.0, 2.0, 3.0, 5.0]), np.radians([0, 10, 20, 20, 0]),
+    >>> in_view(np.array([1.0, 2.0, 2.0, 3.0, 5.0]), np.radians([0, 10, 20, 15, 0]),
     ...         4.0, np.radians(51.0), 2.0, 0.3).tolist()
     [False, True, False, True, False]
     """
@@ -293,15 +293,18 @@ def viewpoints(
     far_m: float,
     toward: IntArray | None = None,
     look_xy_m: FloatArray | None = None,
+    avoid: BoolArray | None = None,
 ) -> IntArray:
     """Standable cells (M, 2) from which to look at the uncovered floor by cells (M, 2).
 
     The place to look at is the uncovered floor cell nearest the mean of those within
     ``look_m`` of the cell (the cell itself when it is uncovered floor; none: the cell is
     returned). The viewpoint is the standable cell from ``near_m`` to ``far_m`` from that
-    place, in line of sight of it, nearest the cell (the side the team comes from); the
-    cell itself when there is none. A robot standing there and turning covers the place
-    (its camera names no person nearer than ``near_m``).
+    place (measured from the place's goal point, or ``look_xy_m`` (M, 2) when given, to
+    the viewpoints' goal points), in line of sight of it, not in ``avoid`` (Hc, Wc),
+    nearest the cell (the side the team comes from) or the cell ``toward`` (M, 2) when
+    given; the cell itself when there is none. A robot standing there and turning
+    covers the place (its camera names no person nearer than ``near_m``).
     """
     out = np.array(cells, dtype=np.int64).reshape(-1, 2)
     hc, wc = cm.shape
@@ -328,7 +331,7 @@ def viewpoints(
         vr, vc = look[0] + dr, look[1] + dc
         ok = (vr >= 0) & (vr < hc) & (vc >= 0) & (vc < wc)
         vr, vc = vr[ok], vc[ok]
-        ok = cm.standable[vr, vc]
+        ok = cm.standable[vr, vc] if avoid is None else cm.standable[vr, vc] & ~avoid[vr, vc]
         vr, vc = vr[ok], vc[ok]
         target = cm.goal_xy(look[None])[0] if look_xy_m is None else look_xy_m[m]
         vxy = cm.goal_xy(np.stack([vr, vc], axis=-1))

@@ -31,6 +31,7 @@ from firefleet.control.mission._params import (
 from firefleet.control.mission._plan import (
     _empty_l,
     allocate,
+    cut_demand,
     explore,
     fire_demand,
     task_distances,
@@ -118,9 +119,7 @@ def _plan(
     if (cm.floor & ~state.covered_coarse).sum() > 0.02 * floor and n_fires:
         # floor left to search: keep explore_frac of the team exploring
         n_work = int((working & (state.mode != REFILL)).sum())
-        budget = max(n_work - math.ceil(params.explore_frac * n_work), n_fires)
-        while need.sum() > budget:
-            need[int(np.argmax(need))] -= 1
+        need = cut_demand(need, len(open_v), n_work, params)
     demand = np.concatenate([need, np.ones(len(open_v), dtype=np.int64)])
     is_fire = np.arange(len(task_xy)) < n_fires
     current = np.full(n, -1, dtype=np.int64)
@@ -185,6 +184,7 @@ def _plan(
     going = np.array([s in ("moving", "waiting") for s in status])
     there = np.array([s == "arrived" for s in status]) & goal_open
     keep = (going | there) & (state.mode == EXPLORE)
+    hot = _near_fire(cm, k.spot_xy_m, params.explore_fire_m)
     cells = explore(
         cm,
         state.covered_coarse,
@@ -193,7 +193,7 @@ def _plan(
         state.explore_cell,
         keep,
         goal_open,
-        state.excluded | _near_fire(cm, k.spot_xy_m, params.explore_fire_m),
+        state.excluded | hot,
         params,
     )
     has = free & (cells[:, 0] >= 0)
@@ -206,6 +206,7 @@ def _plan(
         params.probe_m,
         params.sensing_near_m + 0.25,
         max(params.view_far_m, params.sensing_near_m + 0.5),
+        avoid=hot,
     )
     goals[fresh] = cm.goal_xy(view)
     mode[has] = EXPLORE
