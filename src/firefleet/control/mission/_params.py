@@ -100,9 +100,19 @@ class TacticsParams:
         A fire detection whose peak reads this or more is flames [C]: the fighters aim
         at such spots when their fire has any. Flames (800 C) saturate the Lepton's
         high-gain range (about 450 C); the hot gas a fire pushes out of its room reads
-        less. On mission-office seeds 0-2 (runs of this code before the threshold)
-        93-96 % of the detections reading 300 C or more lay within 1 m of a burning
-        cell; of those lying 1 m or more from every burning cell, 4-15 % read that.
+        less. On mission-office seed 1 (the code before the ledger, ``_water``) the
+        detections reading 440 C or more lay a median 0.5 m from the nearest burning
+        cell, those reading 300-440 C a median 1.25 m (the hot gas at the door), those
+        under 250 C 2 m: 430 C keeps the first and drops the others.
+    soak_l_m2 : float
+        Water per area after which the team believes a cell out and its fuel soaked
+        [L/m^2] (its ledger, ``_water``): the world's ``SprayParams.critical_l_m2``
+        (Drysdale 2011, an energy balance); the fighters aim at flames on cells below.
+    flame_guard_m : float
+        A robot does not drive on towards believed flames (not soaked) nearer than
+        this, within 60 deg of its heading; it turns away (0: off) [m]
+        (``_fight.flame_guard``: the air within 0.5 m of a burning cell is hotter than
+        the rating).
     retreat_c : float
         A fighter in air this hot leaves its place: the place joins the team's hot
         places, which slots keep ``standoff_m`` from [C] (a robot's rating is higher).
@@ -176,6 +186,8 @@ class TacticsParams:
     reslot_s: float = 4.0
     retreat_c: float = 200.0
     flame_c: float = 300.0
+    flame_guard_m: float = 0.8
+    soak_l_m2: float = 1.3
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -217,6 +229,7 @@ class TacticsParams:
                 "reslot_s",
                 "retreat_c",
                 "flame_c",
+                "soak_l_m2",
                 "replan_s",
                 "explore_replan_s",
                 "coverage_period_s",
@@ -241,6 +254,7 @@ class TacticsParams:
                 "fire_keepout_m",
                 "fire_cost",
                 "fire_block_m",
+                "flame_guard_m",
             ),
         )
         for name in (
@@ -297,8 +311,8 @@ class TacticsObservation:
     air_c : ndarray, shape (N,) or None
         Air temperature at each robot (its PT100) [C]; ``None``: not measured.
     fire_peak_c : ndarray, shape (K,) or None
-        Each fire detection's peak reading [C]; ``None``: not given (no spot counts as
-        flames; the fighters aim at every spot).
+        Each fire detection's peak reading [C]; ``None``: not given (every detection
+        counts as flames; the fighters aim at flames only).
     """
 
     t_s: float

@@ -15,7 +15,7 @@ from firefleet.control.mission._coverage import (
     line_of_sight,
     viewpoints,
 )
-from firefleet.control.mission._fight import fight_goals, fire_costmap
+from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
 from firefleet.control.mission._knowledge import fires_of, update_knowledge
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -37,6 +37,7 @@ from firefleet.control.mission._plan import (
     task_distances,
 )
 from firefleet.control.mission._team import TacticsState
+from firefleet.control.mission._water import soaked_at, spray_ledger
 from firefleet.control.navigation import (
     NavigationInputs,
     navigation_retarget,
@@ -256,6 +257,7 @@ def _orders(
     shot_s = np.where((mode == FIGHT) & at_goal, state.shot_s, obs.t_s)
     goals = state.goal_xy_m
     half = params.spray_half_angle_rad
+    soaked = soaked_at(k.wet_l_m2, state.coarse, k.spot_xy_m, params.soak_l_m2)
     for i in map(int, np.flatnonzero(mode == FIGHT)):
         j = np.flatnonzero(ids == state.task_fire[i])
         if len(j) == 0:
@@ -263,9 +265,9 @@ def _orders(
         # aim at the burning spots in reach and in sight, where the cone holds the most
         # (a spot sprayed out is soon seen not burning and dropped: the aim sweeps on);
         # without one, face the fire's centre
-        mine = k.spot_fire == state.task_fire[i]
-        if (mine & k.spot_flame).any():  # flames seen: aim at them, not at the hot gas
-            mine &= k.spot_flame
+        # flames on cells the team has not soaked yet (:mod:`._water`): water on the
+        # hot gas a fire pushes out, or on cells already out, is wasted
+        mine = (k.spot_fire == state.task_fire[i]) & k.spot_flame & ~soaked
         spots = k.spot_xy_m[mine]
         d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
         near = np.flatnonzero(d <= params.spray_range_m)
@@ -292,6 +294,17 @@ def _orders(
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
         spray[i] = bool(len(near)) and abs(err) <= half and obs.tank_l[i] > 0.0
+    if spray.any():
+        wet = spray_ledger(
+            k.wet_l_m2,
+            state.coarse,
+            pose,
+            spray,
+            params.flow_l_s * params.nav_period_s,
+            params.spray_range_m,
+            half,
+        )
+        state = replace(state, knowledge=replace(k, wet_l_m2=wet))
     if settle.any():
         nav = navigation_retarget(nav, pose[:, :2], settle)
         at_goal = at_goal | settle
@@ -316,6 +329,16 @@ def _orders(
     stop = (mode == DAMAGED) | refilling | (mode == IDLE)
     v[stop] = 0.0
     w[stop] = 0.0
+    if params.flame_guard_m > 0.0 and k.spot_flame.any():
+        v, w = flame_guard(
+            v,
+            w,
+            pose,
+            k.spot_xy_m[k.spot_flame & ~soaked],
+            params.flame_guard_m,
+            math.radians(60.0),
+            w_max,
+        )
     nav = replace(nav, command=np.stack([v, w], axis=1))
     orders = Orders(
         v_m_s=v,
