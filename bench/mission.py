@@ -18,6 +18,13 @@
    like mission-office): ``LARGE_S`` simulated seconds (the start: 50 first plans out
    of the lobby, exploration), the same split. Floor of issue 15: >= 5x real time.
 
+4. **Memory of mission-large** (``MEMORY_S`` simulated seconds, in runs of their own
+   under ``tracemalloc``, not timed): the size of ``result.npz`` and the peak of the
+   traced allocations (the run, its metrics and the npz's bytes), with the robots'
+   series recorded at 10 Hz (``sim.kinds.mission.ROBOT_RECORD_S``) and, side by side in
+   the same run, at every tick as before it (the collisions then measured on the
+   recorded poses, as the metric did): the ratios before / after.
+
 Run directly: ``python bench/mission.py``.
 """
 
@@ -36,6 +43,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from rich.console import Console
 from rich.table import Table
 
@@ -51,6 +59,8 @@ LARGE = OFFICE.parent / "mission-large.yaml"
 LARGE_S = 30.0
 """Simulated seconds of mission-large per timed run."""
 FLOOR_LARGE_X = 5.0
+MEMORY_S = 10.0
+"""Simulated seconds of mission-large per memory run (result.npz and peak memory)."""
 PARTS = (
     ("world", "fire, heat, smoke, victims, spray (world stage)"),
     ("ranging", "range sensors"),
@@ -139,9 +149,10 @@ def run(console: Console) -> TopicResult:
     table.add_row("x real time on CPU time", f"{rows[-1].value:.1f}", "(this process's)")
     console.print(table)
     large_rows, large_floor, large_wall_s, large_spent = _large(console)
+    memory_rows = _memory_table(console)
     floors = (Floor.on(row, ">=", FLOOR_OFFICE_X), large_floor)
     return TopicResult(
-        tuple(rows + large_rows),
+        tuple(rows + large_rows + memory_rows),
         floors,
         {
             "office_wall_s": wall_s,
@@ -178,6 +189,75 @@ def _large(console: Console) -> tuple[list[Row], Floor, float, dict[str, float]]
     table.add_row("x real time on CPU time", f"{rows[-1].value:.2f}", "(this process's)")
     console.print(table)
     return rows, Floor.on(row, ">=", FLOOR_LARGE_X), wall_s, spent
+
+
+def memory(name: str | Path, duration_s: float, every_tick: bool) -> tuple[int, int]:
+    """Bytes of ``result.npz`` and the peak of the traced allocations [bytes] of
+    ``duration_s`` simulated seconds of ``name``, its metrics and its npz; ``every_tick``:
+    the robots recorded at every tick and the collisions measured on those poses (as
+    before ``ROBOT_RECORD_S``)."""
+    import tracemalloc
+
+    import firefleet
+    from firefleet.sim.kinds.mission import _command, _grid, _touching
+    from firefleet.sim.registry import TaskKind, task_kind
+
+    scenario = dataclasses.replace(firefleet.load_scenario(name), duration_s=duration_s)
+    kind = task_kind("mission")
+    every = np.arange(scenario.n_steps + 1)
+    tracemalloc.start()
+    try:
+        if every_tick:  # the kind's base run: no thinning of the recorded ticks
+            result = TaskKind.run(kind, scenario, every)
+            radius = _command(scenario).robot_radius_m
+            _touching(_grid(scenario), result.pose[:, :, :2], radius)
+        else:
+            result = kind.run(scenario, every)
+        kind.metrics(result)
+        size = len(result.to_npz_bytes())
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return size, peak
+
+
+def _memory_table(console: Console) -> list[Row]:
+    """mission-large's result.npz and peak memory, every tick vs 10 Hz, in one run."""
+    mb = 1e-6
+    before = memory(LARGE, MEMORY_S, every_tick=True)
+    after = memory(LARGE, MEMORY_S, every_tick=False)
+    per_min = 60.0 / MEMORY_S
+    table = Table(title=f"mission-large memory, {MEMORY_S:g} s simulated")
+    for col in ("", "robots every tick", "robots at 10 Hz", "before / after"):
+        table.add_column(col)
+    rows: list[Row] = []
+    for i, (key, label) in enumerate((("npz", "result.npz"), ("peak", "peak memory"))):
+        table.add_row(
+            f"{label}, MB",
+            f"{before[i] * mb:.1f}",
+            f"{after[i] * mb:.1f}",
+            f"{before[i] / after[i]:.1f}",
+        )
+        if key == "npz":  # the file grows with the run; the peak has a fixed part
+            table.add_row(
+                f"{label}, MB per simulated minute",
+                f"{before[i] * mb * per_min:.0f}",
+                f"{after[i] * mb * per_min:.0f}",
+                "",
+            )
+        for case, value in (("every_tick", before[i]), ("ten_hz", after[i])):
+            rows.append(
+                Row(
+                    f"mission.large.{key}_mb.{case}",
+                    value * mb,
+                    "MB",
+                    False,
+                    kind="memory",
+                    label=f"mission-large {MEMORY_S:g} s, {label}, robots {case}",
+                )
+            )
+    console.print(table)
+    return rows
 
 
 if __name__ == "__main__":

@@ -211,12 +211,17 @@ def fire_step(
             "(a longer step makes the front square, not round)"
         )
     burning = fire.state == BURNING
-    # log of the probability that no burning neighbour ignites the cell this step
-    log_no = -rate0_hz * dt_s * neighbour_sum(burning.astype(float), _DIAGONAL)
-    factor = 1.0 + np.clip(params.fuel_factor * (fire.fuel - 1.0), -0.9, 1.0)
-    p_ignite = -np.expm1(log_no * factor)
+    near = neighbour_sum(burning.astype(float), _DIAGONAL)
     u = rng.random(fire.state.shape)
-    ignites = (fire.state == UNBURNT) & (fire.fuel > 0.0) & (u < p_ignite)
+    # only an unburnt cell with fuel and a burning neighbour can ignite (elsewhere the
+    # probability is 0): the law on those cells alone, element by element the same
+    cand = np.flatnonzero(((fire.state == UNBURNT) & (fire.fuel > 0.0) & (near > 0.0)).ravel())
+    # log of the probability that no burning neighbour ignites the cell this step
+    log_no = -rate0_hz * dt_s * near.ravel()[cand]
+    factor = 1.0 + np.clip(params.fuel_factor * (fire.fuel.ravel()[cand] - 1.0), -0.9, 1.0)
+    p_ignite = -np.expm1(log_no * factor)
+    ignites = np.zeros(fire.state.shape, dtype=bool)
+    ignites.ravel()[cand[u.ravel()[cand] < p_ignite]] = True
 
     burn_left = fire.burn_left_s - np.where(burning, dt_s, 0.0)
     burns_out = burning & (burn_left <= 1e-9)

@@ -358,6 +358,21 @@ def _orders(
     )
 
 
+def _tank_flags(
+    state: TacticsState, tank: FloatArray, working: BoolArray, params: TacticsParams
+) -> tuple[BoolArray, BoolArray]:
+    """Robots to send to refill (their tank empty, or low while a fire is known) and
+    robots back from it with a full tank."""
+    mode = state.mode
+    empty = working & (tank <= _empty_l(params)) & (mode != REFILL)
+    if len(state.knowledge.spot_xy_m):
+        # while a fire burns, a robot off the fires with a low tank tops it up
+        idle = (mode == EXPLORE) | (mode == IDLE)
+        empty |= working & idle & (tank < params.low_tank_frac * params.tank_l)
+    full = (mode == REFILL) & (tank >= 0.98 * params.tank_l)
+    return empty, full
+
+
 def _tank_changes(
     state: TacticsState,
     pose: FloatArray,
@@ -366,16 +381,10 @@ def _tank_changes(
     params: TacticsParams,
 ) -> TacticsState:
     """Empty tanks go to refill at once; full ones come back (an allocation follows)."""
-    mode = state.mode
-    empty = working & (tank <= _empty_l(params)) & (mode != REFILL)
-    if len(state.knowledge.spot_xy_m):
-        # while a fire burns, a robot off the fires with a low tank tops it up
-        idle = (mode == EXPLORE) | (mode == IDLE)
-        empty |= working & idle & (tank < params.low_tank_frac * params.tank_l)
-    full = (mode == REFILL) & (tank >= 0.98 * params.tank_l)
+    empty, full = _tank_flags(state, tank, working, params)
     if not (empty.any() or full.any()):
         return state
-    mode = mode.copy()
+    mode = state.mode.copy()
     spot = state.refill_spot.copy()
     goals = state.goal_xy_m.copy()
     task_fire = state.task_fire.copy()
@@ -483,6 +492,41 @@ def _watchdog(
     return replace(state, closest_m=closest, closest_s=since, excluded=excluded, pending=True)
 
 
+def _quiet(state: TacticsState, obs: TacticsObservation, params: TacticsParams) -> bool:
+    """Whether the tick at ``obs`` leaves ``state`` as it is (:func:`tactics_step` would
+    return it unchanged, with its held orders): nothing is due (coverage, navigation,
+    a plan), no detection, no robot lost, no tank to send or bring back, no robot in
+    hot air. Nine ticks in ten at the default periods; an input of another shape is
+    not quiet (the full step checks it)."""
+    t = float(obs.t_s)
+    if t >= state.next_coverage_s - _EPS_S or t >= state.next_nav_s - _EPS_S:
+        return False
+    since = t - state.last_plan_s
+    if (state.pending and since >= params.replan_s) or since >= params.explore_replan_s:
+        return False
+    if np.size(obs.fire_xy_m) or np.size(obs.person_xy_m):
+        return False
+    n = len(state.mode)
+    if np.shape(obs.pose_m) != (n, 3):
+        return False
+    tank = np.asarray(obs.tank_l, dtype=float)
+    working = np.asarray(obs.alive, dtype=bool) & ~np.asarray(obs.damaged, dtype=bool)
+    if tank.shape != (n,) or working.shape != (n,) or (~working & ~state.known_damaged).any():
+        return False
+    if len(state.knowledge.spot_xy_m):
+        looked = working if obs.looked is None else working & np.asarray(obs.looked, dtype=bool)
+        if looked.any():
+            return False
+    empty, full = _tank_flags(state, tank, working, params)
+    if empty.any() or full.any():
+        return False
+    if obs.air_c is not None:
+        air = np.asarray(obs.air_c, dtype=float)
+        if (working & (air >= params.retreat_c)).any():
+            return False
+    return True
+
+
 def tactics_step(
     state: TacticsState, obs: TacticsObservation, params: TacticsParams, dt_s: float
 ) -> tuple[TacticsState, Orders]:
@@ -533,6 +577,8 @@ def tactics_step(
     """
     if not (math.isfinite(dt_s) and dt_s > 0.0):
         raise InputError(f"dt_s must be > 0, got {dt_s!r}")
+    if _quiet(state, obs, params):  # nothing due, nothing new: the held orders
+        return state, state.orders
     start = state
     n = len(state.mode)
     t = float(obs.t_s)

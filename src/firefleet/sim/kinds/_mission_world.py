@@ -194,6 +194,7 @@ class MissionWorld:
     smoke_params: FieldParams = SMOKE  # world.fuel.smoke_yield scales its source
     found_radius_m: float = 2.0
     pt100: Pt100Params = dataclasses.field(default_factory=Pt100Params)
+    contacts: Any = None  # _mission_contacts.ContactCheck: the robots' contacts every tick
 
     def init(self, n_robots: int) -> MissionWorldState:
         """The world before the first tick: nothing burning yet, ambient air."""
@@ -213,6 +214,8 @@ class MissionWorld:
             "next_record_s": 0.0,
             "water_used_l": np.zeros(n_robots),
         }
+        if self.contacts is not None:
+            log.update(self.contacts.init(n_robots))
         return MissionWorldState(
             load_torque_n_m=np.zeros((n_robots, 2)),
             voltage_scale=None,
@@ -352,7 +355,9 @@ class MissionWorld:
         """The log: ``field_t_s`` (T'), ``fire_state`` (T', H, W) int8, ``temperature_c``
         (T', H, W) float32 and ``smoke_per_m`` float16, ``detections`` (structured), per victim
         ``victims_found_s`` and ``victim_dose``, per robot ``damaged``, ``water_used_l``,
-        and ``all_out_s``, ``explored_pct``, the fuel and the fires' cells."""
+        and ``all_out_s``, ``explored_pct``, the fuel and the fires' cells; with
+        ``contacts``, the robots' points near walls and who touched another robot
+        (:class:`~firefleet.sim.kinds._mission_contacts.ContactCheck`)."""
         log = state.log
         self._snapshot(dataclasses.replace(state), state.t_s)
         rows = np.concatenate(log["detections"]) if log["detections"] else np.zeros((0, 7))
@@ -375,6 +380,7 @@ class MissionWorld:
             "explored_pct": np.array([log["explored_pct"]]),
             "fire_started": state.started.astype(float),
             "fuel": self.fuel.astype(np.float32),
+            **(self.contacts.final(log) if self.contacts is not None else {}),
         }
 
 
@@ -411,6 +417,8 @@ class MissionSensors:
         if self.ranging is not None:
             out.update(self.ranging.read(world, drive))
         pose = drive.pose
+        if self.world.contacts is not None:  # at every tick: the poses are kept at 10 Hz
+            self.world.contacts.check(world.log, pose)
         out["air_c"] = world.pt100_c  # the PT100's last conversion (module notes)
         out["tank_l"] = np.asarray(world.tank_l, dtype=float)
         out["damaged"] = world.damaged.astype(float)

@@ -24,18 +24,25 @@ every run computes alongside.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from firefleet._typing import FloatArray
+from firefleet._typing import BoolArray, FloatArray
 from firefleet.errors import InputError
 from firefleet.models.kinematics import body_to_wheels
 from firefleet.scenarios._mission import Mission
 from firefleet.scenarios.schema import Scenario
-from firefleet.sim.kinds._mission_smoke import STEREO_METRIC_NAMES, stereo_team_metrics
+from firefleet.sim.kinds._mission_contacts import ContactCheck
+from firefleet.sim.kinds._mission_metrics import _touching as _touching  # re-exported
+from firefleet.sim.kinds._mission_metrics import (
+    baseline_burned_area_m2,
+    mission_metrics,
+)
+from firefleet.sim.kinds._mission_odometry import MissionOdometry
+from firefleet.sim.kinds._mission_smoke import STEREO_METRIC_NAMES
 from firefleet.sim.kinds._mission_world import (
     FIRE,
     PERSON,
@@ -46,16 +53,23 @@ from firefleet.sim.kinds._mission_world import (
 from firefleet.sim.loop import (
     DecideInputs,
     Decider,
-    Odometry,
+    ProgressCallback,
     Stages,
     WheelCommand,
     default_stages,
 )
-from firefleet.sim.registry import Metrics, TaskKind
+from firefleet.sim.registry import TaskKind
 from firefleet.sim.result import SimResult
-from firefleet.world import BURNING, UNBURNT, OccupancyGrid, coarsen
+from firefleet.world import OccupancyGrid, coarsen
 
-__all__ = ["KINDS", "METRIC_NAMES", "mission_decide", "mission_metrics", "mission_world"]
+__all__ = [
+    "KINDS",
+    "METRIC_NAMES",
+    "baseline_burned_area_m2",
+    "mission_decide",
+    "mission_metrics",
+    "mission_world",
+]
 
 METRIC_NAMES = (
     "fires_detected",
@@ -77,6 +91,14 @@ METRIC_NAMES = (
 
 REFILL_L_S = 2.0
 """Refill rate at the refill point [L/s] (a hose at the entrance)."""
+
+ROBOT_RECORD_S = 0.1
+"""The robots' series (poses, the wheel stack's quantities, the decision's ``mode``,
+``spray``, ``tank_l``) are recorded at most this often [s], the tactics' rate: every
+tick of 50 robots over 20 minutes was 516 MB of result.npz. What a sample between
+would change, the ``collisions`` metric, is noted at every tick
+(:mod:`~firefleet.sim.kinds._mission_contacts`); the rest of the metrics read the
+world's log."""
 
 
 def _command(scenario: Scenario) -> Mission:
@@ -147,6 +169,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
         fire_params=FireParams(spread_m_s=spec.spread_m_s),
         pt100=pt100.params() if pt100 is not None else Pt100Params(),
         smoke_params=dataclasses.replace(SMOKE, source=SMOKE.source * spec.fuel.smoke_yield),
+        contacts=ContactCheck.of(_grid(scenario), cmd.robot_radius_m) if cmd.robots else None,
     )
 
 
@@ -205,7 +228,10 @@ def mission_stages(scenario: Scenario, decider: Decider, rng: np.random.Generato
     )
     stages: Any = dataclasses.replace  # the Stages fields are typed for the default stages
     out: Stages = stages(
-        default_stages(scenario, decider), world=world, sensors=sensors, estimation=Odometry()
+        default_stages(scenario, decider),
+        world=world,
+        sensors=sensors,
+        estimation=MissionOdometry(),  # Odometry, on the loop's arrays
     )
     return out
 
@@ -223,6 +249,23 @@ class MissionParams:
     bearings_rad: dict[str, FloatArray]
     robots: bool
     arrive_s: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class MissionMemory:
+    """The decision's memory: the team's (``tactics``, a TacticsState) and the command
+    it last gave, with the damaged robots it was made for: a tick that changes neither
+    (the tactics' quiet tick, no frame, no detection) gives the same wheel references,
+    spray and refill."""
+
+    tactics: Any
+    held: WheelCommand | None = None
+    damaged: BoolArray | None = None
+
+
+_NO_XY = np.zeros((0, 2))
+_NO_ROBOT = np.zeros(0, dtype=np.int64)
+_NO_PEAK = np.zeros(0)
 
 
 def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
@@ -267,7 +310,7 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
     params = MissionParams(tactics, scenario.robot, bearings, cmd.robots, cmd.arrive_s)
     if not cmd.robots:
         return None, params
-    return tactics_init(_grid(scenario), scenario.initial_poses, tactics), params
+    return MissionMemory(tactics_init(_grid(scenario), scenario.initial_poses, tactics)), params
 
 
 def _on_map(
@@ -275,8 +318,8 @@ def _on_map(
 ) -> tuple[FloatArray, np.ndarray, FloatArray]:
     """Detections of one kind placed on the map by the robots' pose estimates: (K, 2)
     positions, robots, peak readings [C]."""
-    if not rows.shape[0]:  # most ticks: no frame, nothing to place
-        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0)
+    if not rows.shape[0]:  # most ticks: no frame, nothing to place (empty: read-only)
+        return _NO_XY, _NO_ROBOT, _NO_PEAK
     pick = rows[rows[:, 1] == kind]
     robot = pick[:, 0].astype(np.int64)
     heading = pose[robot, 2] + pick[:, 2]
@@ -292,8 +335,8 @@ def mission_decide(
 
     Parameters
     ----------
-    state : TacticsState or None
-        The team's brain (None for a run without the team).
+    state : MissionMemory or None
+        The team's brain and the last command (None for a run without the team).
     inputs : DecideInputs
         The pose estimate (N, 3) and the readings: ranges, ``thermal_detections``
         (K, 5: robot, kind, bearing [rad], range [m], peak [C]), ``tank_l``,
@@ -348,13 +391,34 @@ def mission_decide(
         if "air_c" in inputs.readings
         else None,
     )
-    state, orders = tactics_step(state, obs, params.tactics, dt_s)
+    memory = state
+    held = memory.held
+    state, orders = tactics_step(memory.tactics, obs, params.tactics, dt_s)
+    if (
+        held is not None
+        and state is memory.tactics
+        and not rows.shape[0]
+        and not looked.any()
+        and np.array_equal(damaged, memory.damaged)
+    ):  # nothing new (MissionMemory): the held command, with this tick's tanks
+        return memory, WheelCommand(
+            reference_rad_s=held.reference_rad_s,
+            series={**held.series, "tank_l": tank},
+            actions=held.actions,
+        )
     v = np.where(damaged, 0.0, orders.v_m_s)
     omega = np.where(damaged, 0.0, orders.omega_rad_s)
     actions: dict[str, Any] = {
         "spray": np.asarray(orders.spray, dtype=bool),
         "refill": np.asarray(state.refilling, dtype=bool),
     }
+    reference = body_to_wheels(v, omega, params.geometry)
+    series = {
+        "mode": np.asarray(orders.mode, dtype=float),
+        "spray": np.asarray(orders.spray, dtype=float),
+        "tank_l": tank,
+    }
+    held = WheelCommand(reference_rad_s=reference, series=series, actions=dict(actions))
     if rows.shape[0]:
         both = np.concatenate(
             [
@@ -376,158 +440,9 @@ def mission_decide(
         actions["victims_confirmed_xy_m"] = np.asarray(state.victims_xy_m)[confirmed]
     if looked.any():
         actions["explored_pct"] = np.array(100.0 * state.explored_frac)
-    return state, WheelCommand(
-        reference_rad_s=body_to_wheels(v, omega, params.geometry),
-        series={
-            "mode": np.asarray(orders.mode, dtype=float),
-            "spray": np.asarray(orders.spray, dtype=float),
-            "tank_l": tank,
-        },
-        actions=actions,
+    return MissionMemory(state, held, damaged), WheelCommand(
+        reference_rad_s=reference, series=series, actions=actions
     )
-
-
-# --- metrics -------------------------------------------------------------------------------
-
-
-def baseline_burned_area_m2(scenario: Scenario) -> float:
-    """Burned area [m^2] of the same world without the team at ``duration_s`` (the same
-    seed: the fire draws from its own generator, so the two runs burn alike until the
-    team's water changes them)."""
-    world = mission_world(scenario)
-    state = world.init(scenario.n_robots)
-    t = 0.0
-    while t <= scenario.duration_s + 1e-9:
-        state = world.step(state, t)
-        t = state.next_s
-    area = world.field.resolution_m**2
-    return float(np.count_nonzero(state.fire.state != UNBURNT) * area)
-
-
-def _component_burning(fire_state: np.ndarray, cell: tuple[int, int]) -> bool:
-    """Whether the burned region (burning or burnt cells, 8-connected) holding ``cell``
-    still burns."""
-    import scipy.ndimage as ndi
-
-    labels, _ = ndi.label(fire_state != UNBURNT, structure=np.ones((3, 3)))
-    lab = labels[cell]
-    return bool(lab and np.any((labels == lab) & (fire_state == BURNING)))
-
-
-def _touches_wall(grid: OccupancyGrid, xy_m: FloatArray, radius_m: float) -> np.ndarray:
-    """Whether each robot's disc ever overlapped an occupied cell (or the map's edge),
-    shape (N,) from positions (T, N, 2) [m].
-
-    The exact clearance (``clearance_m``, a Python loop over points) is computed only
-    where a lower bound allows a touch: a point in a cell whose centre lies ``e`` cells
-    from the nearest occupied centre is at least ``(e - sqrt 2) * resolution`` from any
-    occupied square. A 50-robot run of 20 minutes at 100 Hz has 6 million points; the
-    bound leaves those near walls.
-    """
-    import scipy.ndimage as ndi
-
-    from firefleet.sim.kinds._navigate_metrics import clearance_m
-
-    h, w = grid.shape
-    edt = ndi.distance_transform_edt(~np.pad(grid.occupied, 1, constant_values=True))[1:-1, 1:-1]
-    rc = grid.cell_of(xy_m)
-    inside = grid.contains(xy_m)
-    bound = np.where(
-        inside,
-        (edt[np.clip(rc[..., 0], 0, h - 1), np.clip(rc[..., 1], 0, w - 1)] - math.sqrt(2.0))
-        * grid.resolution_m,
-        -1.0,
-    )
-    near = bound < radius_m + 1e-9
-    touch = np.zeros(xy_m.shape[1], dtype=bool)
-    if near.any():
-        t_idx, robot = np.nonzero(near)
-        clear = clearance_m(grid, xy_m[t_idx, robot])
-        np.logical_or.at(touch, robot, clear < radius_m)
-    return touch
-
-
-def _touching(grid: OccupancyGrid, xy_m: FloatArray, radius_m: float) -> np.ndarray:
-    """Whether each robot (discs of ``radius_m``, positions (T, N, 2) [m]) ever touched a
-    wall or another robot, shape (N,); robot pairs one robot at a time, (T, N) arrays and
-    not (T, N, N) (50 robots over 120,000 ticks: 2.4 GB)."""
-    touch = _touches_wall(grid, xy_m, radius_m)
-    for i in range(xy_m.shape[1]):
-        d = np.hypot(xy_m[:, :, 0] - xy_m[:, i : i + 1, 0], xy_m[:, :, 1] - xy_m[:, i : i + 1, 1])
-        d[:, i] = np.inf
-        touch[i] |= bool((d < 2 * radius_m).any())
-    return touch
-
-
-def mission_metrics(result: SimResult) -> Metrics:
-    """Metrics of a mission run (issue 15, item 6; module notes).
-
-    ``fires_detected``: fires (of ``world.fires``) with a thermal fire detection within
-    2 m of their burned region; ``first_detection_s``: the first fire detection;
-    ``fires_extinguished``: started fires whose burned region burns no more at the end;
-    ``all_out_s``: when every fire had started and none burned (None if never);
-    ``burned_area_m2`` (cells that burned) and ``baseline_burned_area_m2`` (the same
-    world without the team) and their ratio ``burned_vs_baseline`` (NaN when the
-    baseline burns nothing); ``victims_found`` and ``victims_found_s`` (a victim is
-    found when the team confirms a person detection within 2 m of it); ``victims_alive``
-    (fractional effective dose below 1); ``explored_pct`` (free map cells a thermal
-    camera covered); ``collisions`` (robots that touched a wall or another robot);
-    ``robots_damaged``; ``water_used_l`` per robot.
-    """
-    scenario = result.scenario
-    cmd = _command(scenario)
-    world = mission_world(scenario)
-    x = result.extra
-    fire_state = np.asarray(x["fire_state"])
-    final = fire_state[-1]
-    area = world.field.resolution_m**2
-    det: Any = x["detections"]  # structured (DETECTION_DTYPE)
-    fire_det = det[det["kind"] == "fire"]
-    burned_xy = [
-        world.field.center_of(np.argwhere(final != UNBURNT)),
-    ][0]
-    detected = 0
-    started = np.asarray(x["fire_started"]) > 0.5
-    extinguished = 0
-    import scipy.ndimage as ndi
-    from scipy.spatial import cKDTree
-
-    labels, _ = ndi.label(final != UNBURNT, structure=np.ones((3, 3)))
-    for i, cell in enumerate(world.fire_cells):
-        lab = labels[tuple(cell)]
-        region = world.field.center_of(np.argwhere(labels == lab)) if lab else burned_xy[:0]
-        if len(fire_det) and len(region):
-            # nearest region cell per detection by a k-d tree: (K, R) distances would be
-            # gigabytes at 50 robots (1e5 fire detections x 1e3 burned cells)
-            near, _ = cKDTree(region).query(np.c_[fire_det["x_m"], fire_det["y_m"]])
-            if np.min(near) <= 2.0:
-                detected += 1
-        if started[i] and not _component_burning(final, (int(cell[0]), int(cell[1]))):
-            extinguished += 1
-    found_s = np.asarray(x["victims_found_s"])
-    all_out = float(np.asarray(x["all_out_s"])[0])
-    collided = 0
-    if cmd.robots:
-        collided = int(_touching(_grid(scenario), result.pose[:, :, :2], cmd.robot_radius_m).sum())
-    burned = float(np.count_nonzero(final != UNBURNT) * area)
-    baseline = baseline_burned_area_m2(scenario)
-    return {
-        "fires_detected": float(detected),
-        "first_detection_s": float(fire_det["t_s"].min()) if len(fire_det) else math.nan,
-        "fires_extinguished": float(extinguished),
-        "all_out_s": all_out,  # NaN (null in metrics.json): not all out
-        "burned_area_m2": burned,
-        "baseline_burned_area_m2": baseline,
-        "burned_vs_baseline": burned / baseline if baseline > 0.0 else math.nan,
-        "victims_found": float(np.count_nonzero(np.isfinite(found_s))),
-        "victims_found_s": [float(v) for v in found_s],  # NaN: not found
-        "victims_alive": float(np.count_nonzero(np.asarray(x["victim_dose"]) < 1.0)),
-        "explored_pct": float(np.asarray(x["explored_pct"])[0]),
-        "collisions": float(collided),
-        "robots_damaged": float(np.count_nonzero(np.asarray(x["damaged"]) > 0.5)),
-        "water_used_l": [float(v) for v in np.asarray(x["water_used_l"])],
-        **stereo_team_metrics(scenario, mission_metrics),  # NaN unless command.stereo_team
-    }
 
 
 def _figures(result: SimResult, metrics: dict[str, Any]) -> dict[str, bytes]:
@@ -536,8 +451,27 @@ def _figures(result: SimResult, metrics: dict[str, Any]) -> dict[str, bytes]:
     return figures(result, metrics)
 
 
+class _MissionKind(TaskKind):
+    """The mission's kind: its robots' series at most every ``ROBOT_RECORD_S``."""
+
+    def run(
+        self,
+        scenario: Scenario,
+        rec_steps: NDArray[np.int64],
+        progress: ProgressCallback | None = None,
+        *,
+        staged: bool = False,
+    ) -> SimResult:
+        """Run ``scenario``, recording the ticks of ``rec_steps`` on the
+        ``ROBOT_RECORD_S`` grid (and the last)."""
+        every = max(1, round(ROBOT_RECORD_S / scenario.dt_s))
+        steps = np.asarray(rec_steps, dtype=np.int64)
+        keep = steps[(steps % every == 0) | (steps == steps[-1])] if steps.size else steps
+        return super().run(scenario, keep, progress, staged=staged)
+
+
 KINDS = (
-    TaskKind(
+    _MissionKind(
         name="mission",
         metric_names=METRIC_NAMES,
         metrics=mission_metrics,

@@ -1,6 +1,7 @@
-"""Cost of one tactics_step per tick (not a test: run it by hand).
+"""Cost of one tactics_step per tick, the team's brain alone (by hand; not one of
+``bench/run.py``'s topics: ``bench/mission.py`` times the whole mission).
 
-``PYTHONPATH=src:. python tests/control/mission/bench_step.py ROBOTS MAP [--light] [--nav-s S]
+``PYTHONPATH=src python bench/mission_step.py ROBOTS MAP [--light] [--nav-s S]
 [--plan-cell M] [--res R] [--seconds T]``: MAP is ``office`` (3 robots from the corridor's
 west end) or ``big`` (100 m x 100 m of 10 m rooms with 1 m doors at resolution R, robots
 one per room); robots obey (v, omega) exactly, no detections; thermal frames every 11th
