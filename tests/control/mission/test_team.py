@@ -81,36 +81,39 @@ def test_three_robots_cover_the_office() -> None:
 
 
 def test_explorers_keep_away_from_a_known_fire() -> None:
-    """With a fire known, no explorer's target nor goal lies within explore_fire_m of a
-    believed burning spot (its hot gas damages robots; its own robot goes there); with
-    explore_fire_m = 0 they go nearer (the room around the fire is floor to search)."""
+    """No explorer's viewpoint lies within explore_fire_m of a burning spot (its hot gas
+    damages robots): looking at the floor by a fire, the viewpoint is chosen outside,
+    where without the keep-out it is the nearest cell, beside the fire; in a run, no
+    explorer's goal set after the fire is known lies that near it."""
+    from firefleet.control.mission._coverage import viewpoints
+    from firefleet.control.mission._step import _near_fire
+
     fire = np.array([[8.0, 5.0]])
     start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0], [1.5, 6.5, 0.0]])
-    closest = {}
-    for keep_m in (3.0, 0.0):
-        p = TacticsParams(
-            nav=FAST_NAV,
-            fire_robots_min=1,
-            fire_robots_max=1,
-            explore_fire_m=keep_m,
-            sensing_range_m=4.0,
-        )
-        world = World(room(), p, start, fire_xy=fire, water_l=1e9)
-        best = np.inf
-        for _ in range(250):
-            world.step()
-            s = world.state
-            ex = np.flatnonzero(s.mode == EXPLORE)
-            if len(ex) and len(s.knowledge.spot_xy_m):
-                g = s.goal_xy_m[ex]
-                g = g[np.isfinite(g[:, 0])]
-                if len(g):
-                    d = np.hypot(
-                        g[:, None, 0] - s.knowledge.spot_xy_m[None, :, 0],
-                        g[:, None, 1] - s.knowledge.spot_xy_m[None, :, 1],
-                    )
-                    best = min(best, float(d.min()))
-        closest[keep_m] = best
-    assert np.isfinite(closest[3.0])  # the fire was known and robots explored
-    assert closest[3.0] > 3.0 - 0.25  # a coarse cell's rounding
-    assert closest[0.0] < closest[3.0]
+    p = TacticsParams(nav=FAST_NAV, fire_robots_min=1, fire_robots_max=1, sensing_range_m=4.0)
+    world = World(room(), p, start, fire_xy=fire, water_l=1e9)
+    cm = world.state.coarse
+    hot = _near_fire(cm, fire, 3.0)
+    target = cm.cell_of(np.array([[9.0, 5.0]]))  # the floor just past the fire
+    covered = np.zeros(cm.shape, bool)
+    for avoid, far in ((hot, True), (None, False)):
+        v = viewpoints(cm, covered, target, 0.75, 2.25, 3.0, toward=target, avoid=avoid)
+        d = float(np.hypot(*(cm.goal_xy(v)[0] - fire[0])))
+        assert (d > 3.0 - 0.2) == far, d
+    known_s = np.inf
+    for _ in range(250):
+        before = world.state.goal_xy_m.copy()
+        world.step()
+        s = world.state
+        if len(s.knowledge.spot_xy_m):
+            known_s = min(known_s, world.t_s)
+        new = (s.mode == EXPLORE) & np.isfinite(s.goal_xy_m[:, 0])
+        new &= ~np.all(np.isclose(before, s.goal_xy_m), axis=1)
+        if world.t_s > known_s and new.any() and len(s.knowledge.spot_xy_m):
+            g = s.goal_xy_m[new]
+            d = np.hypot(
+                g[:, None, 0] - s.knowledge.spot_xy_m[None, :, 0],
+                g[:, None, 1] - s.knowledge.spot_xy_m[None, :, 1],
+            )
+            assert d.min() > 3.0 - 0.25
+    assert np.isfinite(known_s)
