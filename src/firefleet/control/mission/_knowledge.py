@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray, IntArray
-from firefleet.control.mission._coverage import CoarseMap, line_of_sight
+from firefleet.control.mission._coverage import CoarseMap, in_view, line_of_sight
 from firefleet.control.mission._params import TacticsParams
 from firefleet.control.mission._water import soaked_at
 
@@ -57,9 +57,11 @@ class Knowledge:
     victim_confirmed_s : ndarray, shape (V,)
         When each was confirmed [s] (NaN: not yet).
     victim_misses : ndarray of int, shape (V,)
-        Looks in a row at each (in a camera's cone, in range, in sight) that saw no
-        person there; an unconfirmed victim with ``victim_out_looks`` of them is
-        dismissed (a false detection: hot gas at a door) until detected again.
+        Looks in a row at each (where the camera would name a person: in its cone
+        narrowed by the person's width, from ``sensing_near_m`` to ``sensing_range_m``,
+        in sight) that saw no person there; an unconfirmed victim with
+        ``victim_out_looks`` of them is dismissed (a false detection: hot gas at a
+        door) until detected again.
     wet_l_m2 : ndarray, shape (Hc, Wc) or (0, 0)
         The team's ledger of the water it sprayed on the coarse cells [L/m^2]
         (:mod:`._water`; (0, 0) before the first spray).
@@ -366,7 +368,15 @@ def _victim_looks(
     dx = vic[None, :, 0] - pose[lookers, None, 0]
     dy = vic[None, :, 1] - pose[lookers, None, 1]
     off = np.abs((np.arctan2(dy, dx) - pose[lookers, None, 2] + np.pi) % (2 * np.pi) - np.pi)
-    in_cone = (np.hypot(dx, dy) <= params.sensing_range_m) & (off <= 0.5 * params.hfov_rad)
+    # a look counts only where the detector would name the person (:func:`in_view`)
+    in_cone = in_view(
+        np.hypot(dx, dy),
+        off,
+        params.sensing_range_m,
+        params.hfov_rad,
+        params.sensing_near_m,
+        params.person_half_width_m,
+    )
     in_cone &= open_[None, :]
     if not in_cone.any():
         return k, False

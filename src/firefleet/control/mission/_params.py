@@ -60,6 +60,16 @@ class TacticsParams:
         "looked at and not there") [m].
     hfov_rad : float
         The thermal camera's horizontal field of view [rad] (the Lepton's 51 deg).
+    sensing_near_m : float
+        Nearest distance at which the camera covers the floor [m]: the detector names a
+        person from 1.8 m on and not at 1.6 m (measured with the mission's renderer;
+        :mod:`._coverage`), so a cell nearer is not searched.
+    person_half_width_m : float
+        The covered cone narrows by ``atan(person_half_width_m / d)`` on each side at
+        distance ``d`` (a person cut by the frame's border is not named) [m].
+    view_far_m : float
+        An explorer looks at the uncovered floor from a cell between
+        ``sensing_near_m + 0.25`` and this far from it [m].
     fire_merge_m : float
         A fire detection within this distance of a believed fire's spots joins it [m].
     victim_merge_m : float
@@ -73,6 +83,9 @@ class TacticsParams:
     explore_frac : float
         While floor is left uncovered, at least this fraction of the working robots
         (rounded up) keeps exploring: the fires' demands are cut to leave them.
+    explore_fire_m : float
+        No explorer's target lies within this distance of a believed burning spot [m]
+        (the fire's hot gas damages robots; the fire's own robots go there).
     fire_keepout_m : float
         Paths are priced higher within this distance of a burning spot [m].
     fire_cost : float
@@ -130,8 +143,8 @@ class TacticsParams:
     detour_factor : float
         Straight-line distance multiplier for frontiers past ``travel_limit_m``.
     probe_m : float
-        An explorer's goal lies up to this far past its frontier, into the uncovered
-        floor [m] (0: on the frontier).
+        An explorer looks at the uncovered floor within this distance of its frontier
+        cell [m] (:func:`._coverage.viewpoints`).
     burgard_beta : float
         Weight of travel cost against utility in Burgard's frontier choice [1/m].
     stall_s : float
@@ -162,11 +175,15 @@ class TacticsParams:
     confirm_repeats: int = 2
     sensing_range_m: float = 4.0
     hfov_rad: float = math.radians(51.0)
+    sensing_near_m: float = 2.0
+    person_half_width_m: float = 0.3
+    view_far_m: float = 3.0
     fire_merge_m: float = 1.0
     victim_merge_m: float = 1.0
     fire_out_looks: int = 9
     victim_out_looks: int = 18
     explore_frac: float = 0.3
+    explore_fire_m: float = 3.0
     fire_keepout_m: float = 1.5
     fire_cost: float = 20.0
     fire_block_m: float = 0.75
@@ -210,6 +227,7 @@ class TacticsParams:
                 "confirm_radius_m",
                 "sensing_range_m",
                 "hfov_rad",
+                "view_far_m",
                 "fire_merge_m",
                 "victim_merge_m",
                 "robot_per_fire_m",
@@ -235,7 +253,10 @@ class TacticsParams:
                 "burgard_beta",
                 "keep_bonus_m",
                 "probe_m",
+                "sensing_near_m",
+                "person_half_width_m",
                 "explore_frac",
+                "explore_fire_m",
                 "fire_keepout_m",
                 "fire_cost",
                 "fire_block_m",

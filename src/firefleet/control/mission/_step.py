@@ -7,9 +7,14 @@ from dataclasses import replace
 
 import numba
 import numpy as np
+import scipy.ndimage as ndi
 
 from firefleet._typing import BoolArray, FloatArray
-from firefleet.control.mission._coverage import cone_coverage
+from firefleet.control.mission._coverage import (
+    CoarseMap,
+    cone_coverage,
+    viewpoints,
+)
 from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
 from firefleet.control.mission._knowledge import fires_of, update_knowledge
 from firefleet.control.mission._params import (
@@ -26,9 +31,9 @@ from firefleet.control.mission._params import (
 from firefleet.control.mission._plan import (
     _empty_l,
     allocate,
+    cut_demand,
     explore,
     fire_demand,
-    probe,
     task_distances,
 )
 from firefleet.control.mission._team import TacticsState
@@ -86,6 +91,19 @@ def _retarget(state: TacticsState, goals: FloatArray, pose: FloatArray) -> Tacti
     return replace(state, nav=nav, goal_xy_m=goals, closest_m=closest, closest_s=since)
 
 
+def _near_fire(cm: CoarseMap, spots_xy_m: FloatArray, radius_m: float) -> BoolArray:
+    """Coarse cells within ``radius_m`` of a burning spot, shape (Hc, Wc): no explorer's
+    target (the hot gas by a fire damages a robot; the fire's robots go there)."""
+    out = np.zeros(cm.shape, dtype=bool)
+    if len(spots_xy_m) == 0 or radius_m <= 0.0:
+        return out
+    rc = cm.cell_of(spots_xy_m)
+    out[rc[:, 0], rc[:, 1]] = True
+    dist: FloatArray = ndi.distance_transform_edt(~out) * cm.cell_m
+    near: BoolArray = dist <= radius_m
+    return near
+
+
 def _plan(
     state: TacticsState,
     pose: FloatArray,
@@ -107,9 +125,7 @@ def _plan(
     if (cm.floor & ~state.covered_coarse).sum() > 0.02 * floor and n_fires:
         # floor left to search: keep explore_frac of the team exploring
         n_work = int((working & (state.mode != REFILL)).sum())
-        budget = max(n_work - math.ceil(params.explore_frac * n_work), n_fires)
-        while need.sum() > budget:
-            need[int(np.argmax(need))] -= 1
+        need = cut_demand(need, len(open_v), n_work, params)
     demand = np.concatenate([need, np.ones(len(open_v), dtype=np.int64)])
     is_fire = np.arange(len(task_xy)) < n_fires
     current = np.full(n, -1, dtype=np.int64)
@@ -137,25 +153,44 @@ def _plan(
     goals[fight & (state.task_fire != task_fire)] = np.nan
     fight_goals(state, pose, task_fire, state.task_fire, goals, params)
     mode[fight] = FIGHT
-    # victims: within half the confirmation radius, on the robot's side
+    # victims: a cell in sight of them, from the camera's nearest range to the
+    # confirmation radius, the nearest to the robot
+    lo_m = min(params.sensing_near_m + 0.25, params.confirm_radius_m - 0.25)
+    hi_m = max(lo_m + 0.15, min(params.confirm_radius_m - 0.2, params.sensing_near_m + 0.5))
     for i in map(int, np.flatnonzero(task_victim >= 0)):
-        v = k.victim_xy_m[task_victim[i]]
         if task_victim[i] == state.task_victim[i] and np.isfinite(goals[i, 0]):
             continue
-        off = pose[i, :2] - v
-        gap = math.hypot(float(off[0]), float(off[1]))
-        spot = v + off * min(1.0, 0.5 * params.confirm_radius_m / max(gap, 1e-9))
-        goals[i] = state.coarse.goal_xy(state.coarse.cell_of(spot[None]))[0]
+        v_xy = k.victim_xy_m[task_victim[i]][None]
+        spot = viewpoints(
+            cm,
+            np.zeros(cm.shape, dtype=bool),
+            cm.cell_of(v_xy),
+            0.0,
+            lo_m,
+            hi_m,
+            toward=cm.cell_of(pose[i : i + 1, :2]),
+            look_xy_m=v_xy,
+        )
+        goals[i] = cm.goal_xy(spot)[0]
         mode[i] = CONFIRM
     mode[task_victim >= 0] = CONFIRM
     # the rest explore
     free = available & (task_fire < 0) & (task_victim < 0)
+    # an explorer's target is open while uncovered floor lies within probe_m of it
+    todo = cm.floor & ~state.covered_coarse
+    kp = max(1, round(params.probe_m / cm.cell_m))
+    near_todo = ndi.maximum_filter(todo, size=2 * kp + 1, mode="constant")
+    tc = state.explore_cell
+    goal_open = np.isfinite(state.goal_xy_m[:, 0]) & (tc[:, 0] >= 0)
+    goal_open &= near_todo[np.maximum(tc[:, 0], 0), np.maximum(tc[:, 1], 0)]
+    # an explorer keeps its target on its way, and once there while it turns to look
+    # at it (the camera names no one nearer than sensing_near_m: the floor by the target
+    # is covered by the turn; the watchdog gives the target up after stall_s)
     status = state.nav.status
-    keep = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
-    goal_rc = cm.cell_of(np.nan_to_num(state.goal_xy_m, nan=-1e9))
-    goal_open = (
-        np.isfinite(state.goal_xy_m[:, 0]) & ~state.covered_coarse[goal_rc[:, 0], goal_rc[:, 1]]
-    )
+    going = np.array([s in ("moving", "waiting") for s in status])
+    there = np.array([s == "arrived" for s in status]) & goal_open
+    keep = (going | there) & (state.mode == EXPLORE)
+    hot = _near_fire(cm, k.spot_xy_m, params.explore_fire_m)
     cells = explore(
         cm,
         state.covered_coarse,
@@ -164,13 +199,22 @@ def _plan(
         state.explore_cell,
         keep,
         goal_open,
-        state.excluded,
+        state.excluded | hot,
         params,
     )
     has = free & (cells[:, 0] >= 0)
     same = has & np.all(cells == state.explore_cell, axis=1) & keep
     fresh = has & ~same
-    goals[fresh] = cm.goal_xy(probe(cm, state.covered_coarse, cells[fresh], params.probe_m))
+    view = viewpoints(
+        cm,
+        state.covered_coarse,
+        cells[fresh],
+        params.probe_m,
+        params.sensing_near_m + 0.25,
+        max(params.view_far_m, params.sensing_near_m + 0.5),
+        avoid=hot,
+    )
+    goals[fresh] = cm.goal_xy(view)
     mode[has] = EXPLORE
     idle = free & ~has
     goals[idle] = np.nan
@@ -654,7 +698,12 @@ def tactics_step(
         state = _too_hot(state, pose, air, working, params, near)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(
-            state.coarse, pose[working], params.sensing_range_m, params.hfov_rad
+            state.coarse,
+            pose[working],
+            params.sensing_range_m,
+            params.hfov_rad,
+            params.sensing_near_m,
+            params.person_half_width_m,
         )
         covered = state.covered_coarse.copy()
         covered[rows, cols] = True
