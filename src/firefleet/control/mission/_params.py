@@ -113,8 +113,8 @@ class TacticsParams:
         [m]: the burning cells and the fuel the front reaches next (1 cm/s: 100 s),
         which, soaked, no longer ignites (a firebreak; ``_water.front_aim``).
     flame_guard_m : float
-        A robot does not drive on towards believed flames (soaked or not) nearer than
-        this, within 60 deg of its heading; it turns away (0: off) [m]
+        A robot (not one going to refill) does not drive on towards believed flames
+        nearer than this, within 60 deg of its heading; it turns away (0: off) [m]
         (``_fight.flame_guard``: the air within 0.5 m of a burning cell is hotter than
         the rating).
     retreat_c : float
