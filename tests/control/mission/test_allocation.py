@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 import pytest
 
 from firefleet.control.mission import TacticsParams
-from firefleet.control.mission._plan import allocate, fire_demand
+from firefleet.control.mission._plan import allocate, cut_demand, fire_demand
 from firefleet.planning.allocation import allocate_tasks
 from firefleet.planning.exploration import assign_frontiers
 
@@ -93,3 +94,35 @@ def test_exclusive_frontiers_are_never_shared(seed: int) -> None:
     assert not set(chosen.tolist()) & set(taken.tolist())  # nor a held one
     # every robot left without one: no target was left for it
     assert (got >= 0).sum() == min(r, f - len(taken))
+
+
+@pytest.mark.parametrize("n_work", [3, 6, 20, 50])
+def test_fire_demands_leave_explorers(n_work: int) -> None:
+    """Demands cut against a brute force: of every way to give the fires at most what
+    they ask (at least fire_robots_min each, or one when the team is too small), the
+    largest total within n_work - ceil(0.3 n_work) - victims, most even (the largest
+    demand as small as it can be)."""
+
+    p = TacticsParams(explore_frac=0.3, fire_robots_min=2, fire_robots_max=6)
+    rng = np.random.default_rng(n_work)
+    for _ in range(20):
+        f = int(rng.integers(1, 4))
+        need = rng.integers(2, 7, f)
+        victims = int(rng.integers(0, 4))
+        out = cut_demand(need, victims, n_work, p)
+        explorers = math.ceil(0.3 * n_work)
+        low = 2 if f * 2 <= n_work - explorers else 1
+        budget = max(n_work - explorers - victims, f * low)
+        best = None
+        for combo in itertools.product(*[range(low, int(k) + 1) for k in need]):
+            c = np.array(combo)
+            if c.sum() > budget:
+                continue
+            key = (-c.sum(), c.max())
+            if best is None or key < best:
+                best = key
+        assert best is not None
+        assert (-out.sum(), out.max()) == best, (need, victims, out)
+        assert np.all(out <= need)
+        if n_work >= 20:
+            assert n_work - out.sum() - victims >= explorers

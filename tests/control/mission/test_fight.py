@@ -2,9 +2,16 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from firefleet.control.mission import MODES, TacticsParams
+from firefleet.control.mission._coverage import CoarseMap, coarse_map
+from firefleet.control.mission._knowledge import behind_water
+from firefleet.control.mission._water import spray_ledger
+from firefleet.control.navigation import build_costmap
+from firefleet.world import FireParams, OccupancyGrid, SprayParams, fire_init, spray_step
 from tests.control.mission._harness import World
 from tests.control.mission.test_team import FAST_NAV, room
 
@@ -12,6 +19,9 @@ FIGHT, REFILL, DAMAGED, EXPLORE = (
     MODES.index(m) for m in ("fight", "refill", "damaged", "explore")
 )
 FIRE = np.array([[6.0, 5.0]])
+NEVER = 1e9
+"""Water per area [L/m^2] (``soak_l_m2``) and litres (``water_l``) a fire that never goes
+out takes: the team never believes its cells soaked."""
 
 
 def settled(world: World, team: np.ndarray) -> bool:
@@ -28,10 +38,15 @@ def test_four_robots_ring_a_fire_at_the_regular_spacing() -> None:
     90 deg +- 6 deg from each other (the regular law's polygon), distance +- 0.12 m,
     facing it and spraying."""
     p = TacticsParams(
-        nav=FAST_NAV, fire_robots_min=4, fire_robots_max=4, sensing_range_m=6.0, explore_frac=0.0
+        soak_l_m2=NEVER,
+        nav=FAST_NAV,
+        fire_robots_min=4,
+        fire_robots_max=4,
+        sensing_range_m=6.0,
+        explore_frac=0.0,
     )
     start = np.array([[1.5, y, 0.0] for y in (3.5, 4.5, 5.5, 6.5)])
-    world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
+    world = World(room(), p, start, fire_xy=FIRE, water_l=NEVER)
     team = np.arange(4)
     world.run(90.0, until=lambda w: w.t_s > 5.0 and settled(w, team))
     assert settled(world, team), world.t_s
@@ -50,6 +65,7 @@ def test_four_robots_ring_a_fire_at_the_regular_spacing() -> None:
 
 def test_an_empty_tank_goes_to_refill_and_comes_back() -> None:
     p = TacticsParams(
+        soak_l_m2=NEVER,
         nav=FAST_NAV,
         fire_robots_min=1,
         fire_robots_max=1,
@@ -59,7 +75,7 @@ def test_an_empty_tank_goes_to_refill_and_comes_back() -> None:
         refill_l_s=1.0,
         refill_xy_m=(1.5, 2.0),
     )
-    world = World(room(), p, np.array([[1.5, 5.0, 0.0]]), fire_xy=FIRE, water_l=1e9)
+    world = World(room(), p, np.array([[1.5, 5.0, 0.0]]), fire_xy=FIRE, water_l=NEVER)
     world.run(120.0)
     mode = np.array([e["mode"][0] for e in world.log])
     tank = np.array([e["tank"][0] for e in world.log])
@@ -82,10 +98,15 @@ def test_an_empty_tank_goes_to_refill_and_comes_back() -> None:
 
 def test_a_damaged_robots_task_is_reassigned() -> None:
     p = TacticsParams(
-        nav=FAST_NAV, fire_robots_min=2, fire_robots_max=2, sensing_range_m=6.0, explore_frac=0.0
+        soak_l_m2=NEVER,
+        nav=FAST_NAV,
+        fire_robots_min=2,
+        fire_robots_max=2,
+        sensing_range_m=6.0,
+        explore_frac=0.0,
     )
     start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0], [1.5, 8.5, 0.0]])
-    world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
+    world = World(room(), p, start, fire_xy=FIRE, water_l=NEVER)
     world.run(
         60.0, until=lambda w: w.t_s > 5.0 and settled(w, np.flatnonzero(w.state.task_fire >= 0))
     )
@@ -149,13 +170,14 @@ def test_a_third_of_the_team_keeps_exploring_while_floor_is_unsearched() -> None
     start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0], [1.5, 6.5, 0.0]])
     for frac, fighters in ((0.3, 2), (0.0, 3)):
         p = TacticsParams(
+            soak_l_m2=NEVER,
             nav=FAST_NAV,
             fire_robots_min=3,
             fire_robots_max=3,
             sensing_range_m=6.0,
             explore_frac=frac,
         )
-        world = World(room(), p, start, fire_xy=FIRE, water_l=1e9)
+        world = World(room(), p, start, fire_xy=FIRE, water_l=NEVER)
         world.run(3.0)
         assert world.state.explored_frac < 0.9
         assert int((world.state.task_fire >= 0).sum()) == fighters
@@ -167,6 +189,7 @@ def test_tanks_fill_only_by_the_refill_point() -> None:
     robot stands within refill_radius_m of the refill point (checked on every logged
     tick), and both go and refill."""
     p = TacticsParams(
+        soak_l_m2=NEVER,
         nav=FAST_NAV,
         fire_robots_min=2,
         fire_robots_max=2,
@@ -179,7 +202,7 @@ def test_tanks_fill_only_by_the_refill_point() -> None:
     )
     fire = np.array([[7.0, 5.0], [7.5, 5.5]])
     start = np.array([[1.5, 4.5, 0.0], [1.5, 5.5, 0.0]])
-    world = World(room(), p, start, fire_xy=fire, water_l=1e9)
+    world = World(room(), p, start, fire_xy=fire, water_l=NEVER)
     world.run(90.0)
     tank = np.array([e["tank"] for e in world.log])
     pose = np.array([e["pose"] for e in world.log])
@@ -228,3 +251,77 @@ def test_a_fighter_in_hot_air_gets_a_slot_standoff_from_there() -> None:
     goal = state.goal_xy_m[0]
     assert np.hypot(*(goal - pose[0, :2])) >= p.standoff_m - 1e-9, goal
     assert np.hypot(*(goal - FIRE[0])) <= p.spray_range_m, goal
+
+
+def _open_cm(width_m: float = 10.0, height_m: float = 5.0) -> tuple[OccupancyGrid, CoarseMap]:
+    """A walled room on a 0.25 m grid and the team's coarse map of it (one cell a cell)."""
+    h, w = round(height_m / 0.25), round(width_m / 0.25)
+    occ = np.zeros((h, w), dtype=bool)
+    occ[0, :] = occ[-1, :] = occ[:, 0] = occ[:, -1] = True
+    occ[:, 24] = True  # a wall at x = 6.0-6.25 m
+    grid = OccupancyGrid(occ, ~occ, resolution_m=0.25)
+    return grid, coarse_map(build_costmap(grid, 0.1), 0.25)
+
+
+def test_the_ledger_wets_the_cells_the_worlds_spray_wets() -> None:
+    """The team's ledger of its water equals the world's spray model (another module,
+    its own cone and line of sight) for nozzles in the open and aimed at a wall."""
+    grid, cm = _open_cm()
+    nozzles = np.array([[1.0, 2.4, 0.1], [4.6, 2.6, -0.2], [3.2, 1.1, 0.9]])
+    on = np.array([True, True, False])
+    fire = fire_init(np.ones(grid.shape), np.zeros(grid.shape, bool), FireParams())
+    temp = np.full(grid.shape, 20.0)
+    _, _, wet, used = spray_step(
+        fire, temp, np.zeros(grid.shape), nozzles, on, grid, SprayParams(), 1.0
+    )
+    ledger = spray_ledger(np.zeros((0, 0)), cm, nozzles, on, 0.5, 3.0, math.radians(15.0))
+    assert used.tolist() == [0.5, 0.5, 0.0]
+    assert wet.sum() > 0
+    np.testing.assert_allclose(ledger, wet, atol=1e-12)
+    assert not ledger[:, 25:].any()  # nothing past the wall
+
+
+def test_a_flame_seen_on_a_soaked_cell_moves_behind_the_water() -> None:
+    """A flame detection on a soaked cell goes along its camera's ray to the first cell
+    not soaked; a wall stops the walk; a gas detection or a dry cell stays."""
+    _grid, cm = _open_cm()
+    wet = np.zeros(cm.shape)
+    cols = np.arange(cm.shape[1])
+    wet[:, (cols >= 8) & (cols < 14)] = 2.0  # soaked: x from 2.0 to 3.5 m
+    wet[:, 20:24] = 2.0  # soaked up to the wall at x = 6 m
+    pose = np.array([[0.5, 2.5, 0.0], [4.0, 2.0, 0.0]])
+    xy = np.array([[2.6, 2.5], [2.6, 2.5], [1.5, 2.5], [5.5, 2.0]])
+    robot = np.array([0, 0, 0, 1])
+    flames = np.array([True, False, True, True])
+    out = behind_water(wet, cm, pose, xy, robot, flames, 1.3)
+    assert 3.5 <= out[0, 0] <= 3.5 + 0.125
+    assert out[0, 1] == 2.5
+    np.testing.assert_array_equal(out[1:], xy[1:])  # gas; a dry cell; the wall behind
+
+
+def test_fighters_wet_the_front_and_the_fuel_beyond_it_not_the_same_cells() -> None:
+    """A fire that never goes out (the harness's point), 40 s of one fighter: with the
+    ledger it aims at the dry cells within front_m of the flames, so its water soaks
+    half as many cells again per litre as a fighter whose ledger never fills (soak_l_m2
+    never reached: it keeps one cone), and cells beyond the point (a firebreak)."""
+    out = {}
+    for soak in (1.3, NEVER):
+        p = TacticsParams(
+            nav=FAST_NAV,
+            fire_robots_min=1,
+            fire_robots_max=1,
+            explore_frac=0.0,
+            sensing_range_m=6.0,
+            soak_l_m2=soak,
+            refill_xy_m=(1.5, 2.0),
+        )
+        world = World(room(), p, np.array([[1.5, 5.0, 0.0]]), fire_xy=FIRE, water_l=NEVER)
+        world.run(40.0)
+        wet = world.state.knowledge.wet_l_m2
+        cm = world.state.coarse
+        xy = cm.goal_xy(np.argwhere(wet >= 1.3))
+        used = p.tank_l - min(e["tank"][0] for e in world.log)
+        beyond = (xy[:, 0] > FIRE[0, 0] + 0.3) & (np.hypot(*(xy - FIRE[0]).T) <= p.front_m)
+        out[soak] = (len(xy) / used, int(beyond.sum()))
+    assert out[1.3][0] >= 1.5 * out[NEVER][0], out
+    assert out[1.3][1] >= 10, out

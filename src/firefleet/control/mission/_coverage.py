@@ -11,10 +11,17 @@ so the team works on a coarse grid of ``plan_cell_m`` (default 0.25 m; a whole n
   farther than robot radius + margin from a wall); its *goal cell* is that open map
   cell nearest to its centre, where the team sends a robot.
 
-Coverage: a robot's thermal camera covers the cells of its cone (``hfov_rad`` wide,
-``sensing_range_m`` long) up to and including the first opaque cell along each ray
-(rays every half cell of arc at full range, samples every half cell), plus the cell it
-stands on. Travel distances: Dijkstra on the standable cells' 8-connected graph
+Coverage: a robot's thermal camera covers the cells where a person standing would be
+named by the detector (:func:`in_view`): from ``near_m`` to ``range_m`` away, inside the
+cone narrowed at each range by the person's half width (the whole person in the frame:
+:func:`firefleet.perception.thermal.detect` leaves a region cut by the frame's left or
+right border "warm"), up to and including the first opaque cell along each ray (rays
+every half cell of arc at full range, samples every half cell). Measured with the
+mission's renderer and the detector (a person at 37 C in 20 C air, Lepton 80 x 60,
+51 deg): named from 1.8 m on, not at 1.6 m or nearer (the person fills too much of
+the frame); at 2 m named 10 deg off the axis, not 20 deg off.
+
+Travel distances: Dijkstra on the standable cells' 8-connected graph
 (:func:`firefleet.planning.geodesic.grid_graph`, built once), optionally cut off at a
 distance limit (``scipy.sparse.csgraph.dijkstra``'s ``limit``).
 """
@@ -27,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.ndimage as ndi
 import scipy.sparse
+from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import dijkstra
 
 from firefleet._typing import BoolArray, FloatArray, IntArray
@@ -34,7 +42,7 @@ from firefleet.control.navigation import Costmap
 from firefleet.planning.geodesic import grid_graph
 from firefleet.world import OccupancyGrid
 
-__all__ = ["CoarseMap", "coarse_map", "cone_coverage", "line_of_sight"]
+__all__ = ["CoarseMap", "coarse_map", "cone_coverage", "in_view", "line_of_sight", "viewpoints"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,8 +187,37 @@ def coarse_map(costmap: Costmap, cell_m: float) -> CoarseMap:
     )
 
 
+def in_view(
+    dist_m: ArrayLike,
+    off_rad: ArrayLike,
+    range_m: float,
+    hfov_rad: float,
+    near_m: float,
+    half_width_m: float,
+) -> BoolArray:
+    """Whether a person at distance ``dist_m`` [m], ``off_rad`` [rad] off the camera's
+    axis, is named by the detector (module notes), ignoring walls.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> in_view(np.array([1.0, 2.0, 2.0, 3.0, 5.0]), np.radians([0, 10, 20, 15, 0]),
+    ...         4.0, np.radians(51.0), 2.0, 0.3).tolist()
+    [False, True, False, True, False]
+    """
+    d = np.asarray(dist_m, dtype=float)
+    half = 0.5 * hfov_rad - np.arctan2(half_width_m, np.maximum(d, 1e-9))
+    out: BoolArray = (d >= near_m) & (d <= range_m) & (np.abs(np.asarray(off_rad)) <= half)
+    return out
+
+
 def cone_coverage(
-    cm: CoarseMap, pose: FloatArray, range_m: float, hfov_rad: float
+    cm: CoarseMap,
+    pose: FloatArray,
+    range_m: float,
+    hfov_rad: float,
+    near_m: float = 0.0,
+    half_width_m: float = 0.0,
 ) -> tuple[IntArray, IntArray]:
     """The coarse cells the robots' cameras cover (module notes).
 
@@ -191,6 +228,11 @@ def cone_coverage(
         Poses x [m], y [m], heading [rad].
     range_m, hfov_rad : float
         The cone's length [m] and opening [rad].
+    near_m : float
+        Nearest covered distance [m] (the detector's nearest range for a person).
+    half_width_m : float
+        The cone narrows by ``atan((half_width_m + cell_m / 2) / d)`` on each side at
+        distance ``d`` (the whole person in the frame, wherever in the cell).
 
     Returns
     -------
@@ -199,7 +241,8 @@ def cone_coverage(
     """
     step = 0.5 * cm.cell_m
     n_rays = max(2, math.ceil(hfov_rad * range_m / step) + 1)
-    ang = pose[:, 2:3] + np.linspace(-0.5 * hfov_rad, 0.5 * hfov_rad, n_rays)[None]  # (N, R)
+    rel = np.linspace(-0.5 * hfov_rad, 0.5 * hfov_rad, n_rays)
+    ang = pose[:, 2:3] + rel[None]  # (N, R)
     dist = np.arange(1, math.floor(range_m / step) + 1) * step  # (S,)
     x = pose[:, 0, None, None] + dist * np.cos(ang)[..., None]  # (N, R, S)
     y = pose[:, 1, None, None] + dist * np.sin(ang)[..., None]
@@ -211,11 +254,12 @@ def cone_coverage(
     # visible: no opaque sample before this one (the first opaque one is seen)
     before = np.zeros_like(blocked)
     before[..., 1:] = np.logical_or.accumulate(blocked, axis=-1)[..., :-1]
-    seen = on & ~before
-    own = cm.cell_of(pose[:, :2])
-    rows = np.concatenate([rc[..., 0][seen], own[:, 0]])
-    cols = np.concatenate([rc[..., 1][seen], own[:, 1]])
-    return rows, cols
+    # a cell is covered when a sample in it is: half a cell more of margin, so that a
+    # person anywhere in it is in view
+    margin = 0.5 * cm.cell_m
+    view = in_view(dist[None, :], rel[:, None], range_m, hfov_rad, near_m, half_width_m + margin)
+    seen = on & ~before & view[None]
+    return rc[..., 0][seen], rc[..., 1][seen]
 
 
 def line_of_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
@@ -237,4 +281,69 @@ def line_of_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
     along = s[None] * seg[:, None]
     ends = (along < cm.cell_m) | (along > seg[:, None] - cm.cell_m)
     out: BoolArray = ~np.any(blocked & ~ends, axis=1)
+    return out
+
+
+def viewpoints(
+    cm: CoarseMap,
+    covered: BoolArray,
+    cells: IntArray,
+    look_m: float,
+    near_m: float,
+    far_m: float,
+    toward: IntArray | None = None,
+    look_xy_m: FloatArray | None = None,
+    avoid: BoolArray | None = None,
+) -> IntArray:
+    """Standable cells (M, 2) from which to look at the uncovered floor by cells (M, 2).
+
+    The place to look at is the uncovered floor cell nearest the mean of those within
+    ``look_m`` of the cell (the cell itself when it is uncovered floor; none: the cell is
+    returned). The viewpoint is the standable cell from ``near_m`` to ``far_m`` from that
+    place (measured from the place's goal point, or ``look_xy_m`` (M, 2) when given, to
+    the viewpoints' goal points), in line of sight of it, not in ``avoid`` (Hc, Wc),
+    nearest the cell (the side the team comes from) or the cell ``toward`` (M, 2) when
+    given; the cell itself when there is none. A robot standing there and turning
+    covers the place (its camera names no person nearer than ``near_m``).
+    """
+    out = np.array(cells, dtype=np.int64).reshape(-1, 2)
+    hc, wc = cm.shape
+    todo = cm.floor & ~covered
+    k = max(1, round(look_m / cm.cell_m))
+    kv = math.ceil(far_m / cm.cell_m) + 1
+    dr, dc = np.mgrid[-kv : kv + 1, -kv : kv + 1]
+    ring_d = np.hypot(dr, dc) * cm.cell_m
+    ring = (ring_d >= near_m - 1.5 * cm.cell_m) & (ring_d <= far_m + 1.5 * cm.cell_m)
+    dr, dc = dr[ring], dc[ring]
+    near_to = out.copy() if toward is None else np.asarray(toward, dtype=np.int64).reshape(-1, 2)
+    for m, (r, c) in enumerate(out.tolist()):
+        if r < 0:
+            continue
+        if todo[r, c]:
+            look = np.array([r, c])
+        else:
+            r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, hc), max(c - k, 0), min(c + k + 1, wc)
+            rc = np.argwhere(todo[r0:r1, c0:c1]) + np.array([r0, c0])
+            if len(rc) == 0:
+                continue
+            mean = rc.mean(axis=0)
+            look = rc[int(np.argmin(np.hypot(*(rc - mean).T)))]
+        vr, vc = look[0] + dr, look[1] + dc
+        ok = (vr >= 0) & (vr < hc) & (vc >= 0) & (vc < wc)
+        vr, vc = vr[ok], vc[ok]
+        ok = cm.standable[vr, vc] if avoid is None else cm.standable[vr, vc] & ~avoid[vr, vc]
+        vr, vc = vr[ok], vc[ok]
+        target = cm.goal_xy(look[None])[0] if look_xy_m is None else look_xy_m[m]
+        vxy = cm.goal_xy(np.stack([vr, vc], axis=-1))
+        d = np.hypot(vxy[:, 0] - target[0], vxy[:, 1] - target[1])
+        ok = (d >= near_m) & (d <= far_m)
+        vr, vc, vxy = vr[ok], vc[ok], vxy[ok]
+        if len(vr) == 0:
+            continue
+        order = np.argsort(np.hypot(vr - near_to[m, 0], vc - near_to[m, 1]), kind="stable")
+        vr, vc, vxy = vr[order], vc[order], vxy[order]
+        sight = line_of_sight(cm, vxy, np.repeat(target[None], len(vr), 0))
+        if sight.any():
+            j = int(np.argmax(sight))
+            out[m] = (vr[j], vc[j])
     return out

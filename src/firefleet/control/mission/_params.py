@@ -60,6 +60,16 @@ class TacticsParams:
         "looked at and not there") [m].
     hfov_rad : float
         The thermal camera's horizontal field of view [rad] (the Lepton's 51 deg).
+    sensing_near_m : float
+        Nearest distance at which the camera covers the floor [m]: the detector names a
+        person from 1.8 m on and not at 1.6 m (measured with the mission's renderer;
+        :mod:`._coverage`), so a cell nearer is not searched.
+    person_half_width_m : float
+        The covered cone narrows by ``atan(person_half_width_m / d)`` on each side at
+        distance ``d`` (a person cut by the frame's border is not named) [m].
+    view_far_m : float
+        An explorer looks at the uncovered floor from a cell between
+        ``sensing_near_m + 0.25`` and this far from it [m].
     fire_merge_m : float
         A fire detection within this distance of a believed fire's spots joins it [m].
     victim_merge_m : float
@@ -73,6 +83,9 @@ class TacticsParams:
     explore_frac : float
         While floor is left uncovered, at least this fraction of the working robots
         (rounded up) keeps exploring: the fires' demands are cut to leave them.
+    explore_fire_m : float
+        No explorer's target lies within this distance of a believed burning spot [m]
+        (the fire's hot gas damages robots; the fire's own robots go there).
     fire_keepout_m : float
         Paths are priced higher within this distance of a burning spot [m].
     fire_cost : float
@@ -87,9 +100,23 @@ class TacticsParams:
         A fire detection whose peak reads this or more is flames [C]: the fighters aim
         at such spots when their fire has any. Flames (800 C) saturate the Lepton's
         high-gain range (about 450 C); the hot gas a fire pushes out of its room reads
-        less. On mission-office seeds 0-2 (runs of this code before the threshold)
-        93-96 % of the detections reading 300 C or more lay within 1 m of a burning
-        cell; of those lying 1 m or more from every burning cell, 4-15 % read that.
+        less. On mission-office seed 1 (the code before the ledger, ``_water``) the
+        detections reading 440 C or more lay a median 0.5 m from the nearest burning
+        cell, those reading 300-440 C a median 1.25 m (the hot gas at the door), those
+        under 250 C 2 m: 430 C keeps the first and drops the others.
+    soak_l_m2 : float
+        Water per area after which the team believes a cell out and its fuel soaked
+        [L/m^2] (its ledger, ``_water``): the world's ``SprayParams.critical_l_m2``
+        (Drysdale 2011, an energy balance); the fighters aim at flames on cells below.
+    front_m : float
+        The fighters aim at the ledger's dry cells within this distance of the flames
+        [m]: the burning cells and the fuel the front reaches next (1 cm/s: 100 s),
+        which, soaked, no longer ignites (a firebreak; ``_water.front_aim``).
+    flame_guard_m : float
+        A robot (not one going to refill) does not drive on towards believed flames
+        nearer than this, within 60 deg of its heading; it turns away (0: off) [m]
+        (``_fight.flame_guard``: the air within 0.5 m of a burning cell is hotter than
+        the rating).
     retreat_c : float
         A fighter in air this hot leaves its place: the place joins the team's hot
         places, which slots keep ``standoff_m`` from [C] (a robot's rating is higher).
@@ -116,8 +143,8 @@ class TacticsParams:
     detour_factor : float
         Straight-line distance multiplier for frontiers past ``travel_limit_m``.
     probe_m : float
-        An explorer's goal lies up to this far past its frontier, into the uncovered
-        floor [m] (0: on the frontier).
+        An explorer looks at the uncovered floor within this distance of its frontier
+        cell [m] (:func:`._coverage.viewpoints`).
     burgard_beta : float
         Weight of travel cost against utility in Burgard's frontier choice [1/m].
     stall_s : float
@@ -148,17 +175,24 @@ class TacticsParams:
     confirm_repeats: int = 2
     sensing_range_m: float = 4.0
     hfov_rad: float = math.radians(51.0)
+    sensing_near_m: float = 2.0
+    person_half_width_m: float = 0.3
+    view_far_m: float = 3.0
     fire_merge_m: float = 1.0
     victim_merge_m: float = 1.0
     fire_out_looks: int = 9
     victim_out_looks: int = 18
     explore_frac: float = 0.3
+    explore_fire_m: float = 3.0
     fire_keepout_m: float = 1.5
     fire_cost: float = 20.0
     fire_block_m: float = 0.75
     reslot_s: float = 4.0
     retreat_c: float = 200.0
     flame_c: float = 300.0
+    flame_guard_m: float = 0.8
+    soak_l_m2: float = 1.3
+    front_m: float = 1.0
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2
     fire_robots_max: int = 6
@@ -193,12 +227,15 @@ class TacticsParams:
                 "confirm_radius_m",
                 "sensing_range_m",
                 "hfov_rad",
+                "view_far_m",
                 "fire_merge_m",
                 "victim_merge_m",
                 "robot_per_fire_m",
                 "reslot_s",
                 "retreat_c",
                 "flame_c",
+                "soak_l_m2",
+                "front_m",
                 "replan_s",
                 "explore_replan_s",
                 "coverage_period_s",
@@ -216,10 +253,14 @@ class TacticsParams:
                 "burgard_beta",
                 "keep_bonus_m",
                 "probe_m",
+                "sensing_near_m",
+                "person_half_width_m",
                 "explore_frac",
+                "explore_fire_m",
                 "fire_keepout_m",
                 "fire_cost",
                 "fire_block_m",
+                "flame_guard_m",
             ),
         )
         for name in (
@@ -276,8 +317,8 @@ class TacticsObservation:
     air_c : ndarray, shape (N,) or None
         Air temperature at each robot (its PT100) [C]; ``None``: not measured.
     fire_peak_c : ndarray, shape (K,) or None
-        Each fire detection's peak reading [C]; ``None``: not given (no spot counts as
-        flames; the fighters aim at every spot).
+        Each fire detection's peak reading [C]; ``None``: not given (every detection
+        counts as flames; the fighters aim at flames only).
     """
 
     t_s: float

@@ -31,6 +31,7 @@ multi-robot exploration", IEEE Transactions on Robotics 21(3), 2005.
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 import scipy.ndimage as ndi
@@ -41,7 +42,7 @@ from firefleet.control.mission._params import TacticsParams
 from firefleet.planning.allocation import allocate_tasks
 from firefleet.planning.exploration import assign_frontiers, find_frontiers
 
-__all__ = ["allocate", "explore", "fire_demand", "task_distances"]
+__all__ = ["allocate", "cut_demand", "explore", "fire_demand", "task_distances"]
 
 _EIGHT = ndi.generate_binary_structure(2, 2)
 
@@ -53,6 +54,38 @@ def fire_demand(extent_m: FloatArray, params: TacticsParams) -> IntArray:
     """Robots each fire needs (module notes), shape (F,)."""
     k = params.fire_robots_min + np.floor(np.asarray(extent_m) / params.robot_per_fire_m)
     out: IntArray = np.clip(k, params.fire_robots_min, params.fire_robots_max).astype(np.int64)
+    return out
+
+
+def cut_demand(need: IntArray, n_victims: int, n_work: int, params: TacticsParams) -> IntArray:
+    """The fires' demands (F,) cut so that ``explore_frac`` of the ``n_work`` working
+    robots (rounded up) stay free to explore while floor is left to search.
+
+    The open victims (one robot each) count against the same budget; the fires keep
+    ``fire_robots_min`` each at least (one each when the team is smaller than that).
+    The largest demand is cut first (no crowding at one fire).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.mission import TacticsParams
+    >>> p = TacticsParams(explore_frac=0.3, fire_robots_min=2)
+    >>> cut_demand(np.array([6, 6, 4]), 5, 40, p).tolist()  # 40 - 12 - 5 = 23 for fires
+    [6, 6, 4]
+    >>> cut_demand(np.array([6, 6, 6, 6]), 10, 40, p).tolist()  # 40 - 12 - 10 = 18
+    [4, 4, 5, 5]
+    >>> cut_demand(np.array([2]), 1, 3, p).tolist()  # 3 robots: the fire keeps its 2
+    [2]
+    """
+    out = np.array(need, dtype=np.int64)
+    n_fires = len(out)
+    budget = n_work - math.ceil(params.explore_frac * n_work) - n_victims
+    floor = n_fires * params.fire_robots_min
+    if floor > n_work - math.ceil(params.explore_frac * n_work):
+        floor = n_fires
+    budget = max(budget, floor)
+    while out.sum() > budget:
+        out[int(np.argmax(out))] -= 1
     return out
 
 
@@ -235,38 +268,6 @@ def explore(
         if len(inner) and len(who):
             pick = _choose(cm, pose[who], inner, np.asarray(kept, dtype=np.int64), params)
             out[who[pick >= 0]] = inner[pick[pick >= 0]]
-    return out
-
-
-def probe(cm: CoarseMap, covered: BoolArray, cells: IntArray, probe_m: float) -> IntArray:
-    """Goals a little past frontier cells (M, 2), into the floor not yet covered.
-
-    From each cell, along the mean direction to the uncovered floor cells within
-    ``probe_m``, the farthest standable cell within ``probe_m`` reached without crossing
-    an opaque or unstandable one (the cell itself when none is uncovered near it): the
-    robot goes into the room it is to look at, not just to its door.
-    """
-    out = np.array(cells, dtype=np.int64).reshape(-1, 2)
-    k = max(1, round(probe_m / cm.cell_m))
-    hc, wc = cm.shape
-    todo = cm.floor & ~covered
-    for m, (r, c) in enumerate(out.tolist()):
-        if r < 0:
-            continue
-        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, hc), max(c - k, 0), min(c + k + 1, wc)
-        rc = np.argwhere(todo[r0:r1, c0:c1]) + np.array([r0, c0])
-        if len(rc) == 0:
-            continue
-        u = rc.mean(axis=0) - (r, c)
-        norm = float(np.hypot(u[0], u[1]))
-        if norm < 1e-9:
-            continue
-        u = u / norm
-        for step in range(1, k + 1):
-            rr, cc = round(r + step * u[0]), round(c + step * u[1])
-            if not (0 <= rr < hc and 0 <= cc < wc) or cm.opaque[rr, cc] or not cm.standable[rr, cc]:
-                break
-            out[m] = (rr, cc)
     return out
 
 

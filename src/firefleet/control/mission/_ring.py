@@ -130,17 +130,19 @@ def _valid(
     pts: FloatArray,
     avoid: FloatArray,
     avoid_m: float,
+    clear: FloatArray,
 ) -> BoolArray:
-    """Slots a robot may stand on (open, ``near_m`` from every spot and ``avoid_m`` from
-    every hot place), can get to (``reachable``, on the map grid) and spray the fire
-    from (:func:`has_shot`)."""
+    """Slots a robot may stand on (open, ``near_m`` from every spot and every point of
+    ``clear``, ``avoid_m`` from every hot place), can get to (``reachable``, on the map
+    grid) and spray the fire from (:func:`has_shot`)."""
     grid = costmap.grid
     inside = grid.contains(pts)
     rc = grid.cell_of(pts)
     h, w = grid.shape
     r, c = np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)
     open_ = inside & ~costmap.blocked[r, c] & reachable[r, c]
-    open_ &= _clear(pts, spots, near_m) & _clear(pts, avoid, avoid_m)
+    open_ &= _clear(pts, spots, near_m) & _clear(pts, clear, near_m)
+    open_ &= _clear(pts, avoid, avoid_m)
     out: BoolArray = open_ & has_shot(cm, pts, spots, near_m, shot_m)
     return out
 
@@ -159,6 +161,7 @@ def ring_slots(
     gap_m: float = 0.0,
     avoid_xy_m: FloatArray | None = None,
     avoid_m: float = 0.0,
+    clear_xy_m: FloatArray | None = None,
 ) -> FloatArray:
     """Each robot's slot on the ring about a fire (module notes).
 
@@ -192,6 +195,9 @@ def ring_slots(
         Places too hot to stand (where a robot's air reached its retreat temperature).
     avoid_m : float
         Least distance of a slot from them [m].
+    clear_xy_m : ndarray, shape (C, 2), optional
+        More places a slot keeps ``near_m`` from without aiming at them (flames the
+        team believes it has soaked: the fire may still burn next to them).
 
     Returns
     -------
@@ -204,9 +210,10 @@ def ring_slots(
     reach = np.ones(costmap.grid.shape, dtype=bool) if reachable is None else reachable
 
     avoid = np.zeros((0, 2)) if avoid_xy_m is None else np.asarray(avoid_xy_m).reshape(-1, 2)
+    clear = np.zeros((0, 2)) if clear_xy_m is None else np.asarray(clear_xy_m).reshape(-1, 2)
 
     def valid(pts: FloatArray) -> BoolArray:
-        return _valid(cm, costmap, reach, spots, near_m, shot_m, pts, avoid, avoid_m)
+        return _valid(cm, costmap, reach, spots, near_m, shot_m, pts, avoid, avoid_m, clear)
 
     m = len(robots)
     ring = regular_ring(c, radius_m, robots)

@@ -7,10 +7,15 @@ from dataclasses import replace
 
 import numba
 import numpy as np
+import scipy.ndimage as ndi
 
 from firefleet._typing import BoolArray, FloatArray
-from firefleet.control.mission._coverage import cone_coverage, line_of_sight
-from firefleet.control.mission._fight import fight_goals, fire_costmap
+from firefleet.control.mission._coverage import (
+    CoarseMap,
+    cone_coverage,
+    viewpoints,
+)
+from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
 from firefleet.control.mission._knowledge import fires_of, update_knowledge
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -26,12 +31,18 @@ from firefleet.control.mission._params import (
 from firefleet.control.mission._plan import (
     _empty_l,
     allocate,
+    cut_demand,
     explore,
     fire_demand,
-    probe,
     task_distances,
 )
 from firefleet.control.mission._team import TacticsState
+from firefleet.control.mission._water import (
+    add_water,
+    cone_cells,
+    front_aim,
+    wets_flames,
+)
 from firefleet.control.navigation import (
     NavigationInputs,
     navigation_retarget,
@@ -80,6 +91,19 @@ def _retarget(state: TacticsState, goals: FloatArray, pose: FloatArray) -> Tacti
     return replace(state, nav=nav, goal_xy_m=goals, closest_m=closest, closest_s=since)
 
 
+def _near_fire(cm: CoarseMap, spots_xy_m: FloatArray, radius_m: float) -> BoolArray:
+    """Coarse cells within ``radius_m`` of a burning spot, shape (Hc, Wc): no explorer's
+    target (the hot gas by a fire damages a robot; the fire's robots go there)."""
+    out = np.zeros(cm.shape, dtype=bool)
+    if len(spots_xy_m) == 0 or radius_m <= 0.0:
+        return out
+    rc = cm.cell_of(spots_xy_m)
+    out[rc[:, 0], rc[:, 1]] = True
+    dist: FloatArray = ndi.distance_transform_edt(~out) * cm.cell_m
+    near: BoolArray = dist <= radius_m
+    return near
+
+
 def _plan(
     state: TacticsState,
     pose: FloatArray,
@@ -101,9 +125,7 @@ def _plan(
     if (cm.floor & ~state.covered_coarse).sum() > 0.02 * floor and n_fires:
         # floor left to search: keep explore_frac of the team exploring
         n_work = int((working & (state.mode != REFILL)).sum())
-        budget = max(n_work - math.ceil(params.explore_frac * n_work), n_fires)
-        while need.sum() > budget:
-            need[int(np.argmax(need))] -= 1
+        need = cut_demand(need, len(open_v), n_work, params)
     demand = np.concatenate([need, np.ones(len(open_v), dtype=np.int64)])
     is_fire = np.arange(len(task_xy)) < n_fires
     current = np.full(n, -1, dtype=np.int64)
@@ -131,25 +153,44 @@ def _plan(
     goals[fight & (state.task_fire != task_fire)] = np.nan
     fight_goals(state, pose, task_fire, state.task_fire, goals, params)
     mode[fight] = FIGHT
-    # victims: within half the confirmation radius, on the robot's side
+    # victims: a cell in sight of them, from the camera's nearest range to the
+    # confirmation radius, the nearest to the robot
+    lo_m = min(params.sensing_near_m + 0.25, params.confirm_radius_m - 0.25)
+    hi_m = max(lo_m + 0.15, min(params.confirm_radius_m - 0.2, params.sensing_near_m + 0.5))
     for i in map(int, np.flatnonzero(task_victim >= 0)):
-        v = k.victim_xy_m[task_victim[i]]
         if task_victim[i] == state.task_victim[i] and np.isfinite(goals[i, 0]):
             continue
-        off = pose[i, :2] - v
-        gap = math.hypot(float(off[0]), float(off[1]))
-        spot = v + off * min(1.0, 0.5 * params.confirm_radius_m / max(gap, 1e-9))
-        goals[i] = state.coarse.goal_xy(state.coarse.cell_of(spot[None]))[0]
+        v_xy = k.victim_xy_m[task_victim[i]][None]
+        spot = viewpoints(
+            cm,
+            np.zeros(cm.shape, dtype=bool),
+            cm.cell_of(v_xy),
+            0.0,
+            lo_m,
+            hi_m,
+            toward=cm.cell_of(pose[i : i + 1, :2]),
+            look_xy_m=v_xy,
+        )
+        goals[i] = cm.goal_xy(spot)[0]
         mode[i] = CONFIRM
     mode[task_victim >= 0] = CONFIRM
     # the rest explore
     free = available & (task_fire < 0) & (task_victim < 0)
+    # an explorer's target is open while uncovered floor lies within probe_m of it
+    todo = cm.floor & ~state.covered_coarse
+    kp = max(1, round(params.probe_m / cm.cell_m))
+    near_todo = ndi.maximum_filter(todo, size=2 * kp + 1, mode="constant")
+    tc = state.explore_cell
+    goal_open = np.isfinite(state.goal_xy_m[:, 0]) & (tc[:, 0] >= 0)
+    goal_open &= near_todo[np.maximum(tc[:, 0], 0), np.maximum(tc[:, 1], 0)]
+    # an explorer keeps its target on its way, and once there while it turns to look
+    # at it (the camera names no one nearer than sensing_near_m: the floor by the target
+    # is covered by the turn; the watchdog gives the target up after stall_s)
     status = state.nav.status
-    keep = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
-    goal_rc = cm.cell_of(np.nan_to_num(state.goal_xy_m, nan=-1e9))
-    goal_open = (
-        np.isfinite(state.goal_xy_m[:, 0]) & ~state.covered_coarse[goal_rc[:, 0], goal_rc[:, 1]]
-    )
+    going = np.array([s in ("moving", "waiting") for s in status])
+    there = np.array([s == "arrived" for s in status]) & goal_open
+    keep = (going | there) & (state.mode == EXPLORE)
+    hot = _near_fire(cm, k.spot_xy_m, params.explore_fire_m)
     cells = explore(
         cm,
         state.covered_coarse,
@@ -158,13 +199,22 @@ def _plan(
         state.explore_cell,
         keep,
         goal_open,
-        state.excluded,
+        state.excluded | hot,
         params,
     )
     has = free & (cells[:, 0] >= 0)
     same = has & np.all(cells == state.explore_cell, axis=1) & keep
     fresh = has & ~same
-    goals[fresh] = cm.goal_xy(probe(cm, state.covered_coarse, cells[fresh], params.probe_m))
+    view = viewpoints(
+        cm,
+        state.covered_coarse,
+        cells[fresh],
+        params.probe_m,
+        params.sensing_near_m + 0.25,
+        max(params.view_far_m, params.sensing_near_m + 0.5),
+        avoid=hot,
+    )
+    goals[fresh] = cm.goal_xy(view)
     mode[has] = EXPLORE
     idle = free & ~has
     goals[idle] = np.nan
@@ -212,42 +262,59 @@ def _orders(
     shot_s = np.where((mode == FIGHT) & at_goal, state.shot_s, obs.t_s)
     goals = state.goal_xy_m
     half = params.spray_half_angle_rad
+    wet = k.wet_l_m2
     for i in map(int, np.flatnonzero(mode == FIGHT)):
         j = np.flatnonzero(ids == state.task_fire[i])
         if len(j) == 0:
             continue
-        # aim at the burning spots in reach and in sight, where the cone holds the most
-        # (a spot sprayed out is soon seen not burning and dropped: the aim sweeps on);
-        # without one, face the fire's centre
-        mine = k.spot_fire == state.task_fire[i]
-        if (mine & k.spot_flame).any():  # flames seen: aim at them, not at the hot gas
-            mine &= k.spot_flame
-        spots = k.spot_xy_m[mine]
-        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
-        near = np.flatnonzero(d <= params.spray_range_m)
-        if len(near):
-            sight = line_of_sight(
-                state.coarse, np.repeat(pose[i : i + 1, :2], len(near), 0), spots[near]
-            )
-            near = near[sight]
-        if len(near):
-            rel = spots[near] - pose[i, :2]
-            bearing = np.arctan2(rel[:, 1], rel[:, 0])
-            held = (np.abs(_wrap(bearing[:, None] - bearing[None, :])) <= half).sum(axis=1)
-            best = np.lexsort((d[near], -held))[0]
-            target = spots[near[best]]
-            shot_s[i] = obs.t_s
-            # held up on its way (no closer in the navigation's stuck time) with a shot
-            # already: it stops there and sprays
-            if not at_goal[i] and obs.t_s - state.closest_s[i] >= params.nav.stuck_time_s:
-                settle[i] = True
+        # aim where the cone holds the most front cells (the ledger's dry cells within
+        # front_m of the flames: the flames and the fuel they reach next, a firebreak);
+        # water on the hot gas a fire pushes out, or on cells already soaked, is wasted;
+        # without a front cell in reach and in sight, face the fire's centre
+        spots = k.spot_xy_m[(k.spot_fire == state.task_fire[i]) & k.spot_flame]
+        aim = front_aim(
+            wet,
+            state.coarse,
+            pose[i],
+            spots,
+            params.spray_range_m,
+            half,
+            params.soak_l_m2,
+            params.front_m,
+        )
+        if aim is not None:
+            target = aim
+            d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
+            if (d <= params.spray_range_m).any():  # a flame in reach: a shot
+                shot_s[i] = obs.t_s
+                # held up on its way (no closer in the navigation's stuck time) with a
+                # shot already: it stops there and sprays
+                if not at_goal[i] and obs.t_s - state.closest_s[i] >= params.nav.stuck_time_s:
+                    settle[i] = True
         else:
             target = fxy[int(j[0])]
         err = float(_wrap(np.arctan2(target[1] - pose[i, 1], target[0] - pose[i, 0]) - pose[i, 2]))
         if at_goal[i] or settle[i]:
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
-        spray[i] = bool(len(near)) and abs(err) <= half and obs.tank_l[i] > 0.0
+        if aim is not None and abs(err) <= half and obs.tank_l[i] > 0.0:
+            # only a cone that holds dry cells at the flames (the ledger's)
+            rows, cols = cone_cells(state.coarse, pose[i], params.spray_range_m, half)
+            if wets_flames(
+                wet,
+                state.coarse,
+                rows,
+                cols,
+                spots,
+                params.soak_l_m2,
+                params.front_m,
+            ):
+                spray[i] = True
+                wet = add_water(
+                    wet, state.coarse, rows, cols, params.flow_l_s * params.nav_period_s
+                )
+    if spray.any():
+        state = replace(state, knowledge=replace(k, wet_l_m2=wet))
     if settle.any():
         nav = navigation_retarget(nav, pose[:, :2], settle)
         at_goal = at_goal | settle
@@ -267,11 +334,29 @@ def _orders(
     scan = (mode == EXPLORE) & arrived
     v[scan] = 0.0
     w[scan] = params.scan_omega_rad_s
-    # refilling only by the refill point (not where a blocked path left it)
-    refilling = (mode == REFILL) & at_goal & (d_goal <= params.refill_radius_m)
+    # refilling only by the refill point (not where a blocked path left it): within
+    # refill_radius_m of it, through the robot's spot and the spot nearest the point
+    spots_r = state.refill_spots_m
+    spot_i = np.clip(state.refill_spot, 0, len(spots_r) - 1)
+    off = np.hypot(*(spots_r[spot_i] - spots_r[0]).T)
+    refilling = (mode == REFILL) & at_goal & (d_goal + off <= params.refill_radius_m)
     stop = (mode == DAMAGED) | refilling | (mode == IDLE)
     v[stop] = 0.0
     w[stop] = 0.0
+    if params.flame_guard_m > 0.0 and k.spot_flame.any():
+        # every robot but a refiller stops short of flames (a refiller leaves: on
+        # mission-office seed 1 two were held in the fire's room by the flames at its door)
+        who = mode != REFILL
+        if who.any():
+            v[who], w[who] = flame_guard(
+                v[who],
+                w[who],
+                pose[who],
+                k.spot_xy_m[k.spot_flame],
+                params.flame_guard_m,
+                math.radians(60.0),
+                w_max,
+            )
     nav = replace(nav, command=np.stack([v, w], axis=1))
     orders = Orders(
         v_m_s=v,
@@ -325,8 +410,9 @@ def _tank_changes(
     spots = state.refill_spots_m
     for i in map(int, np.flatnonzero(empty)):
         used = np.bincount(spot[spot >= 0], minlength=len(spots))
-        d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
-        spot[i] = int(np.lexsort((d, used))[0])
+        # the free spot nearest the point (spots come nearest first): one farther out,
+        # nearer the robot, leaves it refilling up to 2 refill_radius_m from the point
+        spot[i] = int(np.lexsort((np.arange(len(spots)), used))[0])
         goals[i] = spots[spot[i]]
         mode[i] = REFILL
         task_fire[i] = -1
@@ -348,13 +434,18 @@ def _tank_changes(
 def _too_hot(
     state: TacticsState,
     pose: FloatArray,
-    air_c: FloatArray,
+    air_c: FloatArray | None,
     working: BoolArray,
     params: TacticsParams,
+    near: BoolArray | None = None,
 ) -> TacticsState:
-    """A robot in air of ``retreat_c`` or more marks its place hot (once per half metre);
-    a fighter there gets a new slot at the next plan."""
-    hot = working & (air_c >= params.retreat_c)
+    """A robot in air of ``retreat_c`` or more, or seeing flames nearer than
+    ``flame_guard_m`` (``near``: its probe lags the air by seconds, its camera does
+    not), marks its place hot (once per half metre); a fighter there gets a new slot at
+    the next plan."""
+    hot = working & (air_c >= params.retreat_c) if air_c is not None else np.zeros_like(working)
+    if near is not None:
+        hot |= working & near
     if not hot.any():
         return state
     known = state.hot_xy_m
@@ -596,11 +687,27 @@ def tactics_step(
             messages_sent=state.messages_sent + len(fire_xy) + len(person_xy),
         )
     state = _tank_changes(state, pose, tank, working, params)
-    if obs.air_c is not None:
-        state = _too_hot(state, pose, np.asarray(obs.air_c, dtype=float), working, params)
+    near = np.zeros(n, dtype=bool)
+    if len(fire_xy) and params.flame_guard_m > 0.0:
+        fr = np.asarray(obs.fire_robot, dtype=np.int64)
+        flame = (
+            np.ones(len(fire_xy), dtype=bool)
+            if obs.fire_peak_c is None
+            else np.asarray(obs.fire_peak_c, dtype=float) >= params.flame_c
+        )
+        close = flame & (np.hypot(*(fire_xy - pose[fr, :2]).T) < params.flame_guard_m)
+        near[fr[close]] = True
+    if obs.air_c is not None or near.any():
+        air = None if obs.air_c is None else np.asarray(obs.air_c, dtype=float)
+        state = _too_hot(state, pose, air, working, params, near)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(
-            state.coarse, pose[working], params.sensing_range_m, params.hfov_rad
+            state.coarse,
+            pose[working],
+            params.sensing_range_m,
+            params.hfov_rad,
+            params.sensing_near_m,
+            params.person_half_width_m,
         )
         covered = state.covered_coarse.copy()
         covered[rows, cols] = True

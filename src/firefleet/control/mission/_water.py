@@ -1,0 +1,245 @@
+"""The team's ledger of the water it has put down: which floor cells its sprays soaked.
+
+A robot knows where it stood (its pose estimate), where its nozzle pointed, how long it
+sprayed and at what flow; the ledger spreads each spray's litres equally over the open
+cells of the cone in front of it (centre within the nozzle's reach and half-angle, in
+line of sight), as the water falls (:func:`firefleet.world.spray_step`'s model, on the
+team's coarse grid). A cell whose water per area reached ``critical_l_m2`` is *soaked*:
+its fire is out and its fuel no longer ignites, so more water there is wasted. The
+fighters aim at flames on cells not yet soaked (:mod:`._step`), and a flame seen on a
+soaked cell is pushed along the camera's ray to the first cell not soaked: the flames
+are behind the water line (:mod:`._knowledge`).
+
+References
+----------
+D. Drysdale, An Introduction to Fire Dynamics, 3rd ed., Wiley 2011, ch. 9-10 (the
+critical water per area, the constant ``world.SprayParams.critical_l_m2`` holds).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from firefleet._typing import BoolArray, FloatArray, IntArray
+from firefleet.control.mission._coverage import CoarseMap, line_of_sight
+
+__all__ = [
+    "CRITICAL_L_M2",
+    "add_water",
+    "cone_cells",
+    "front_aim",
+    "soaked_at",
+    "spray_ledger",
+    "wets_flames",
+]
+
+
+CRITICAL_L_M2 = 1.3
+"""Water per area that puts a burning surface out and soaks unburnt fuel [L/m^2]
+(the world's ``SprayParams.critical_l_m2``, Drysdale 2011: the module notes)."""
+
+
+def _centres(cm: CoarseMap, rows: IntArray, cols: IntArray) -> FloatArray:
+    """Centres [m] (K, 2) of coarse cells."""
+    f = cm.factor
+    rc = np.stack([(rows + 0.5) * f - 0.5, (cols + 0.5) * f - 0.5], axis=-1)
+    out: FloatArray = cm.grid.center_of(rc)
+    return out
+
+
+def cone_cells(
+    cm: CoarseMap, pose: FloatArray, range_m: float, half_angle_rad: float
+) -> tuple[IntArray, IntArray]:
+    """The coarse floor cells a nozzle at ``pose`` (x [m], y [m], heading [rad]) wets.
+
+    Parameters
+    ----------
+    cm : CoarseMap
+    pose : ndarray, shape (3,)
+    range_m, half_angle_rad : float
+        The jet's reach [m] and the cone's half-angle [rad].
+
+    Returns
+    -------
+    rows, cols : ndarray of int, shape (K,)
+        Cells whose centre lies within reach and angle, in line of sight.
+
+    Examples
+    --------
+    >>> import math
+    >>> import numpy as np
+    >>> from firefleet.control.mission._coverage import coarse_map
+    >>> from firefleet.control.navigation import build_costmap
+    >>> from firefleet.world import OccupancyGrid
+    >>> walls = np.zeros((20, 40), dtype=bool)
+    >>> cm = coarse_map(build_costmap(OccupancyGrid(walls, ~walls, resolution_m=0.25), 0.1), 0.25)
+    >>> r, c = cone_cells(cm, np.array([1.0, 2.5, 0.0]), 3.0, math.radians(15.0))
+    >>> int(len(r)), int(c.min()), int(c.max())  # 38 cells of 1/16 m^2: the cone's 2.36 m^2
+    (38, 6, 15)
+    """
+    h, w = cm.shape
+    reach = math.ceil(range_m / cm.cell_m) + 1
+    r0, c0 = (int(v) for v in cm.cell_of(np.asarray(pose[:2], dtype=float)))
+    rr, cc = np.mgrid[
+        max(r0 - reach, 0) : min(r0 + reach + 1, h), max(c0 - reach, 0) : min(c0 + reach + 1, w)
+    ]
+    rows, cols = rr.ravel(), cc.ravel()
+    keep = cm.floor[rows, cols]
+    rows, cols = rows[keep], cols[keep]
+    xy = _centres(cm, rows, cols)
+    d = xy - pose[:2]
+    dist = np.hypot(d[:, 0], d[:, 1])
+    off = np.abs((np.arctan2(d[:, 1], d[:, 0]) - pose[2] + np.pi) % (2 * np.pi) - np.pi)
+    sel = (dist <= range_m) & (off <= half_angle_rad) & (dist > 0.0)
+    rows, cols, xy = rows[sel], cols[sel], xy[sel]
+    if len(rows):
+        ok = line_of_sight(cm, np.repeat(pose[None, :2], len(rows), 0), xy)
+        rows, cols = rows[ok], cols[ok]
+    return rows, cols
+
+
+def spray_ledger(
+    wet_l_m2: FloatArray,
+    cm: CoarseMap,
+    pose: FloatArray,
+    spraying: BoolArray,
+    litres: float,
+    range_m: float,
+    half_angle_rad: float,
+) -> FloatArray:
+    """The ledger after each spraying robot put ``litres`` on its cone (module notes).
+
+    Parameters
+    ----------
+    wet_l_m2 : ndarray, shape (Hc, Wc) or (0, 0)
+        Water per area so far [L/m^2] ((0, 0): none yet).
+    cm : CoarseMap
+    pose : ndarray, shape (N, 3)
+        Estimated poses.
+    spraying : ndarray of bool, shape (N,)
+    litres : float
+        Water each sprays meanwhile [L] (flow times the time the order holds).
+    range_m, half_angle_rad : float
+
+    Returns
+    -------
+    ndarray, shape (Hc, Wc)
+        A new array (the input is not changed).
+    """
+    wet = np.zeros(cm.shape) if wet_l_m2.shape != cm.shape else wet_l_m2.copy()
+    area = cm.cell_m**2
+    for i in map(int, np.flatnonzero(spraying)):
+        rows, cols = cone_cells(cm, pose[i], range_m, half_angle_rad)
+        if len(rows):
+            np.add.at(wet, (rows, cols), litres / (len(rows) * area))
+    return wet
+
+
+def soaked_at(
+    wet_l_m2: FloatArray, cm: CoarseMap, xy_m: FloatArray, soak_l_m2: float = CRITICAL_L_M2
+) -> BoolArray:
+    """Whether the cells under the points (K, 2) [m] got ``soak_l_m2`` or more."""
+    xy = np.asarray(xy_m, dtype=float).reshape(-1, 2)
+    if wet_l_m2.shape != cm.shape or len(xy) == 0:
+        return np.zeros(len(xy), dtype=bool)
+    rc = cm.cell_of(xy)
+    out: BoolArray = wet_l_m2[rc[:, 0], rc[:, 1]] >= soak_l_m2
+    return out
+
+
+def add_water(
+    wet_l_m2: FloatArray, cm: CoarseMap, rows: IntArray, cols: IntArray, litres: float
+) -> FloatArray:
+    """The ledger after ``litres`` fell, split equally, on the cells (K,) of one cone
+    (a new array; (0, 0): a new ledger)."""
+    wet = np.zeros(cm.shape) if wet_l_m2.shape != cm.shape else wet_l_m2.copy()
+    if len(rows):
+        np.add.at(wet, (rows, cols), litres / (len(rows) * cm.cell_m**2))
+    return wet
+
+
+def wets_flames(
+    wet_l_m2: FloatArray,
+    cm: CoarseMap,
+    rows: IntArray,
+    cols: IntArray,
+    flames_xy_m: FloatArray,
+    soak_l_m2: float,
+    radius_m: float,
+) -> bool:
+    """Whether a cone's cells (K,) hold a cell not yet soaked within ``radius_m`` of a
+    believed flame (F, 2) [m]: the spray would do some good (a flame behind a wall
+    the cone stops at, or on cells already soaked, is no reason to spray)."""
+    f = np.asarray(flames_xy_m, dtype=float).reshape(-1, 2)
+    if len(rows) == 0 or len(f) == 0:
+        return False
+    if wet_l_m2.shape == cm.shape:
+        dry = wet_l_m2[rows, cols] < soak_l_m2
+        rows, cols = rows[dry], cols[dry]
+    xy = _centres(cm, rows, cols)
+    d = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1])
+    return bool((d <= radius_m).any())
+
+
+def front_aim(
+    wet_l_m2: FloatArray,
+    cm: CoarseMap,
+    pose: FloatArray,
+    flames_xy_m: FloatArray,
+    reach_m: float,
+    half_angle_rad: float,
+    soak_l_m2: float,
+    front_m: float,
+) -> FloatArray | None:
+    """Where a nozzle at ``pose`` should point: the cell whose bearing puts the most
+    *front* cells in the cone, or None when no front cell is in reach and in sight.
+
+    A front cell is an open cell within ``front_m`` of a believed flame (F, 2) that the
+    ledger does not hold soaked: a burning cell at the flames, or unburnt fuel the
+    front reaches next (wetting it makes a firebreak: a soaked cell no longer ignites).
+
+    Parameters
+    ----------
+    wet_l_m2 : ndarray, shape (Hc, Wc) or (0, 0)
+    cm : CoarseMap
+    pose : ndarray, shape (3,)
+    flames_xy_m : ndarray, shape (F, 2)
+    reach_m, half_angle_rad : float
+        The jet's reach [m] and the cone's half-angle [rad].
+    soak_l_m2, front_m : float
+
+    Returns
+    -------
+    ndarray, shape (2,) or None
+        The aim point [m].
+    """
+    f = np.asarray(flames_xy_m, dtype=float).reshape(-1, 2)
+    if len(f) == 0:
+        return None
+    h, w = cm.shape
+    n = math.ceil(reach_m / cm.cell_m) + 1
+    r0, c0 = (int(v) for v in cm.cell_of(np.asarray(pose[:2], dtype=float)))
+    rr, cc = np.mgrid[max(r0 - n, 0) : min(r0 + n + 1, h), max(c0 - n, 0) : min(c0 + n + 1, w)]
+    rows, cols = rr.ravel(), cc.ravel()
+    keep = cm.floor[rows, cols]
+    if wet_l_m2.shape == cm.shape:
+        keep &= wet_l_m2[rows, cols] < soak_l_m2
+    rows, cols = rows[keep], cols[keep]
+    xy = _centres(cm, rows, cols)
+    rel = xy - pose[:2]
+    dist = np.hypot(rel[:, 0], rel[:, 1])
+    near_f = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1]).min(axis=1)
+    sel = (dist <= reach_m) & (dist >= cm.cell_m) & (near_f <= front_m)
+    xy, rel = xy[sel], rel[sel]
+    if len(xy) == 0:
+        return None
+    xy = xy[line_of_sight(cm, np.repeat(pose[None, :2], len(xy), 0), xy)]
+    if len(xy) == 0:
+        return None
+    bearing = np.arctan2(xy[:, 1] - pose[1], xy[:, 0] - pose[0])
+    off = np.abs((bearing[:, None] - bearing[None, :] + np.pi) % (2 * np.pi) - np.pi)
+    held = (off <= half_angle_rad).sum(axis=1)
+    out: FloatArray = xy[int(np.argmax(held))]
+    return out
