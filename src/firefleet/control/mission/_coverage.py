@@ -42,7 +42,15 @@ from firefleet.control.navigation import Costmap
 from firefleet.planning.geodesic import grid_graph
 from firefleet.world import OccupancyGrid
 
-__all__ = ["CoarseMap", "coarse_map", "cone_coverage", "in_view", "line_of_sight", "viewpoints"]
+__all__ = [
+    "CoarseMap",
+    "clear_sight",
+    "coarse_map",
+    "cone_coverage",
+    "in_view",
+    "line_of_sight",
+    "viewpoints",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -284,6 +292,42 @@ def line_of_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
     return out
 
 
+def clear_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
+    """Whether no opaque cell lies between each point ``a`` (M, 2) and the point ``b``
+    (2,) [m], the cells of both ends excepted (:func:`line_of_sight` also lets a cell
+    next to either end pass, so a viewpoint beside a wall would see through it).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.world import OccupancyGrid
+    >>> from firefleet.control.navigation import build_costmap
+    >>> occ = np.zeros((40, 80), bool); occ[:, 39:41] = True   # a wall at x = 2 m
+    >>> cm = coarse_map(build_costmap(OccupancyGrid(occ, ~occ, 0.05), 0.2), 0.25)
+    >>> a = np.array([[1.6, 1.0], [0.5, 1.0]])
+    >>> b = np.array([3.0, 1.0])
+    >>> clear_sight(cm, a, b).tolist()
+    [False, False]
+    >>> clear_sight(cm, a, np.array([1.0, 1.5])).tolist()
+    [True, True]
+    """
+    a = np.asarray(a_m, dtype=float).reshape(-1, 2)
+    b = np.asarray(b_m, dtype=float).reshape(2)
+    if len(a) == 0:
+        return np.zeros(0, dtype=bool)
+    seg = np.hypot(b[0] - a[:, 0], b[1] - a[:, 1])
+    n = max(2, math.ceil(float(seg.max()) / (0.25 * cm.cell_m)) + 1)
+    s = np.linspace(0.0, 1.0, n)
+    pts = a[:, None] + s[None, :, None] * (b - a)[:, None]
+    rc = cm.cell_of(pts)
+    own_a = cm.cell_of(a)
+    own_b = cm.cell_of(b[None])[0]
+    ends = np.all(rc == own_a[:, None], axis=-1) | np.all(rc == own_b, axis=-1)
+    blocked = cm.opaque[rc[..., 0], rc[..., 1]] & ~ends
+    out: BoolArray = ~blocked.any(axis=1)
+    return out
+
+
 def viewpoints(
     cm: CoarseMap,
     covered: BoolArray,
@@ -294,6 +338,7 @@ def viewpoints(
     toward: IntArray | None = None,
     look_xy_m: FloatArray | None = None,
     avoid: BoolArray | None = None,
+    limit_m: float = 8.0,
 ) -> IntArray:
     """Standable cells (M, 2) from which to look at the uncovered floor by cells (M, 2).
 
@@ -302,9 +347,10 @@ def viewpoints(
     returned). The viewpoint is the standable cell from ``near_m`` to ``far_m`` from that
     place (measured from the place's goal point, or ``look_xy_m`` (M, 2) when given, to
     the viewpoints' goal points), in line of sight of it, not in ``avoid`` (Hc, Wc),
-    nearest the cell (the side the team comes from) or the cell ``toward`` (M, 2) when
-    given; the cell itself when there is none. A robot standing there and turning
-    covers the place (its camera names no person nearer than ``near_m``).
+    nearest by travel on the map (searched to ``limit_m``; then by straight line) to the
+    cell (the side the team comes from) or to the cell ``toward`` (M, 2) when given
+    (not a cell behind a wall); the cell itself when there is none. A robot standing
+    there and turning covers the place (its camera names no person nearer than ``near_m``).
     """
     out = np.array(cells, dtype=np.int64).reshape(-1, 2)
     hc, wc = cm.shape
@@ -340,9 +386,15 @@ def viewpoints(
         vr, vc, vxy = vr[ok], vc[ok], vxy[ok]
         if len(vr) == 0:
             continue
-        order = np.argsort(np.hypot(vr - near_to[m, 0], vc - near_to[m, 1]), kind="stable")
+        # nearest by travel on the map from the cell (or ``toward``), then by the crow
+        node = np.asarray([near_to[m, 0] * wc + near_to[m, 1]], dtype=np.int64)
+        if not cm.standable[near_to[m, 0], near_to[m, 1]]:
+            node = cm.node_of(cm.goal_xy(near_to[m : m + 1]))
+        travel = cm.distances(node, limit_m)[0][vr * wc + vc]
+        crow = np.hypot(vr - near_to[m, 0], vc - near_to[m, 1])
+        order = np.lexsort((crow, travel))
         vr, vc, vxy = vr[order], vc[order], vxy[order]
-        sight = line_of_sight(cm, vxy, np.repeat(target[None], len(vr), 0))
+        sight = clear_sight(cm, vxy, target)
         if sight.any():
             j = int(np.argmax(sight))
             out[m] = (vr[j], vc[j])

@@ -170,6 +170,7 @@ def _plan(
             hi_m,
             toward=cm.cell_of(pose[i : i + 1, :2]),
             look_xy_m=v_xy,
+            limit_m=4.0 * params.travel_limit_m,
         )
         goals[i] = cm.goal_xy(spot)[0]
         mode[i] = CONFIRM
