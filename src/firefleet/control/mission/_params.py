@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.navigation import NavigationParams
 from firefleet.errors import InputError, check_fields
+from firefleet.world import SprayParams
 
 __all__ = ["MODES", "Orders", "TacticsObservation", "TacticsParams"]
 
@@ -191,7 +192,7 @@ class TacticsParams:
     retreat_c: float = 200.0
     flame_c: float = 300.0
     flame_guard_m: float = 0.8
-    soak_l_m2: float = 1.3
+    soak_l_m2: float = SprayParams.critical_l_m2  # the world's water per area (Drysdale)
     front_m: float = 1.0
     robot_per_fire_m: float = 1.0
     fire_robots_min: int = 2

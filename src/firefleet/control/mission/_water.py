@@ -26,7 +26,6 @@ from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap, line_of_sight
 
 __all__ = [
-    "CRITICAL_L_M2",
     "add_water",
     "cone_cells",
     "front_aim",
@@ -34,11 +33,6 @@ __all__ = [
     "spray_ledger",
     "wets_flames",
 ]
-
-
-CRITICAL_L_M2 = 1.3
-"""Water per area that puts a burning surface out and soaks unburnt fuel [L/m^2]
-(the world's ``SprayParams.critical_l_m2``, Drysdale 2011: the module notes)."""
 
 
 def _centres(cm: CoarseMap, rows: IntArray, cols: IntArray) -> FloatArray:
@@ -137,9 +131,7 @@ def spray_ledger(
     return wet
 
 
-def soaked_at(
-    wet_l_m2: FloatArray, cm: CoarseMap, xy_m: FloatArray, soak_l_m2: float = CRITICAL_L_M2
-) -> BoolArray:
+def soaked_at(wet_l_m2: FloatArray, cm: CoarseMap, xy_m: FloatArray, soak_l_m2: float) -> BoolArray:
     """Whether the cells under the points (K, 2) [m] got ``soak_l_m2`` or more."""
     xy = np.asarray(xy_m, dtype=float).reshape(-1, 2)
     if wet_l_m2.shape != cm.shape or len(xy) == 0:
