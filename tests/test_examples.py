@@ -42,3 +42,32 @@ def test_readme_slam_example_is_the_shipped_file() -> None:
     readme = (EXAMPLES.parent / "README.md").read_text()
     code = (EXAMPLES / "slam_loop.py").read_text().split('"""', 2)[2].strip()
     assert code in readme
+
+
+@pytest.mark.parametrize(
+    "path", sorted((EXAMPLES / "missions").rglob("mission-*.yaml")), ids=lambda p: p.stem
+)
+def test_the_mission_examples_load_with_their_maps(path: Path) -> None:
+    from firefleet import load_scenario
+    from firefleet.world import load_map
+
+    scn = load_scenario(path)
+    assert scn.command.kind == "mission"
+    assert {c.metric for c in scn.claims} == {
+        "fires_extinguished",
+        "victims_found",
+        "burned_vs_baseline",
+        "collisions",
+    }
+    assert scn.world is not None
+    grid = load_map(scn.world.map)  # a built-in name, or the file beside the scenario
+    assert grid.free.any()
+
+
+def test_the_house_map_is_what_its_script_draws() -> None:
+    from firefleet.world import load_map
+
+    draw = runpy.run_path(str(EXAMPLES / "missions" / "house" / "draw_house.py"))
+    shipped = load_map(EXAMPLES / "missions" / "house" / "house.yaml")
+    assert shipped.occupied.shape == (240, 320)
+    assert (shipped.occupied == draw["house"]()).all()
