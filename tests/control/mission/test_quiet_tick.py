@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+import firefleet.control.mission._quiet as quiet_mod
 import firefleet.control.mission._step as step_mod
 from firefleet.control.mission import (
     TacticsObservation,
@@ -31,7 +32,7 @@ def _full(
 ) -> tuple[TacticsState, Any]:
     """The step without the quiet path (the reference)."""
     with monkeypatch.context() as m:
-        m.setattr(step_mod, "_quiet", lambda *a: False)
+        m.setattr(step_mod, "is_quiet", lambda *a: False)
         return tactics_step(state, obs, params, dt_s)
 
 
@@ -50,7 +51,7 @@ def test_quiet_ticks_of_a_run_change_nothing_in_the_full_step(
         dt_s=0.01,
     )
     quiet: list[tuple[TacticsState, TacticsObservation]] = []
-    real = step_mod._quiet
+    real = quiet_mod.is_quiet
 
     def spy(state: TacticsState, obs: TacticsObservation, p: TacticsParams) -> bool:
         out = real(state, obs, p)
@@ -58,9 +59,9 @@ def test_quiet_ticks_of_a_run_change_nothing_in_the_full_step(
             quiet.append((state, obs))
         return out
 
-    monkeypatch.setattr(step_mod, "_quiet", spy)
+    monkeypatch.setattr(step_mod, "is_quiet", spy)
     world.run(8.0)
-    monkeypatch.setattr(step_mod, "_quiet", real)
+    monkeypatch.setattr(step_mod, "is_quiet", real)
     # the harness looks with every camera at every tick: once a fire is known, no tick is
     # quiet; before, nine in ten
     assert 100 < len(quiet) < 800
@@ -106,7 +107,7 @@ def test_quiet_exactly_when_the_full_step_changes_nothing(
     obs = dataclasses.replace(obs, **{"t_s": 0.05, **change})
     full, _ = _full(monkeypatch, state, obs, params, 0.01)
     assert (full is state) == quiet
-    assert step_mod._quiet(state, obs, params) == quiet
+    assert quiet_mod.is_quiet(state, obs, params) == quiet
     got, orders = tactics_step(state, obs, params, 0.01)
     if full is state:
         assert got is state
@@ -114,8 +115,8 @@ def test_quiet_exactly_when_the_full_step_changes_nothing(
 
 
 def test_compiled_robot_tests_equal_the_array_form() -> None:
-    """``_robots_quiet`` against the full step's array expressions (lost robots, looks at
-    a known fire, ``_tank_flags``, ``_too_hot``) on random teams."""
+    """``robots_quiet`` against the full step's array expressions (lost robots, looks at
+    a known fire, ``tank_flags``, ``_too_hot``) on random teams."""
     from firefleet.control.mission._params import EXPLORE, IDLE, REFILL
     from firefleet.control.mission._plan import _empty_l
 
@@ -149,7 +150,7 @@ def test_compiled_robot_tests_equal_the_array_form() -> None:
             or full.any()
             or (has_air and (working & (air >= params.retreat_c)).any())
         )
-        got = step_mod._robots_quiet(
+        got = quiet_mod.robots_quiet(
             mode, tank, alive, damaged, known, looked, air, has_air, spots, empty_l, low_l,
             full_l, params.retreat_c,
         )  # fmt: skip

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-import numba
 import numpy as np
 import scipy.ndimage as ndi
 
@@ -29,13 +28,14 @@ from firefleet.control.mission._params import (
     TacticsParams,
 )
 from firefleet.control.mission._plan import (
-    _empty_l,
     allocate,
     cut_demand,
     explore,
     fire_demand,
     task_distances,
 )
+from firefleet.control.mission._quiet import EPS_S as _EPS_S
+from firefleet.control.mission._quiet import is_quiet, tank_flags
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.mission._water import (
     add_water,
@@ -51,9 +51,6 @@ from firefleet.control.navigation import (
 from firefleet.errors import InputError, as_float_array
 
 __all__ = ["tactics_step"]
-
-_EPS_S = 1e-9
-"""Times this close count as equal (ticks summed in floating point) [s]."""
 
 _MOVE_M = 0.25
 """A new goal this close to the old one does not re-plan the robot's path [m]."""
@@ -377,21 +374,6 @@ def _orders(
     )
 
 
-def _tank_flags(
-    state: TacticsState, tank: FloatArray, working: BoolArray, params: TacticsParams
-) -> tuple[BoolArray, BoolArray]:
-    """Robots to send to refill (their tank empty, or low while a fire is known) and
-    robots back from it with a full tank."""
-    mode = state.mode
-    empty = working & (tank <= _empty_l(params)) & (mode != REFILL)
-    if len(state.knowledge.spot_xy_m):
-        # while a fire burns, a robot off the fires with a low tank tops it up
-        idle = (mode == EXPLORE) | (mode == IDLE)
-        empty |= working & idle & (tank < params.low_tank_frac * params.tank_l)
-    full = (mode == REFILL) & (tank >= 0.98 * params.tank_l)
-    return empty, full
-
-
 def _tank_changes(
     state: TacticsState,
     pose: FloatArray,
@@ -400,7 +382,7 @@ def _tank_changes(
     params: TacticsParams,
 ) -> TacticsState:
     """Empty tanks go to refill at once; full ones come back (an allocation follows)."""
-    empty, full = _tank_flags(state, tank, working, params)
+    empty, full = tank_flags(state, tank, working, params)
     if not (empty.any() or full.any()):
         return state
     mode = state.mode.copy()
@@ -517,90 +499,6 @@ def _watchdog(
     return replace(state, closest_m=closest, closest_s=since, excluded=excluded, pending=True)
 
 
-def _quiet(state: TacticsState, obs: TacticsObservation, params: TacticsParams) -> bool:
-    """Whether the tick at ``obs`` leaves ``state`` as it is (:func:`tactics_step` would
-    return it unchanged, with its held orders): nothing is due (coverage, navigation,
-    a plan), no detection, no robot lost, no tank to send or bring back, no robot in
-    hot air. Nine ticks in ten at the default periods; an input of another shape is
-    not quiet (the full step checks it)."""
-    t = float(obs.t_s)
-    if t >= state.next_coverage_s - _EPS_S or t >= state.next_nav_s - _EPS_S:
-        return False
-    since = t - state.last_plan_s
-    if (state.pending and since >= params.replan_s) or since >= params.explore_replan_s:
-        return False
-    if np.size(obs.fire_xy_m) or np.size(obs.person_xy_m):
-        return False
-    n = len(state.mode)
-    if np.shape(obs.pose_m) != (n, 3):
-        return False
-    tank = np.asarray(obs.tank_l, dtype=np.float64)
-    alive = np.asarray(obs.alive, dtype=np.bool_)
-    damaged = np.asarray(obs.damaged, dtype=np.bool_)
-    if tank.shape != (n,) or alive.shape != (n,) or damaged.shape != (n,):
-        return False
-    looked = np.ones(n, dtype=np.bool_) if obs.looked is None else np.asarray(obs.looked)
-    air = None if obs.air_c is None else np.asarray(obs.air_c, dtype=np.float64)
-    if looked.shape != (n,) or looked.dtype != np.bool_ or (air is not None and air.shape != (n,)):
-        return False
-    return _robots_quiet(
-        state.mode,
-        tank,
-        alive,
-        damaged,
-        state.known_damaged,
-        looked,
-        np.zeros(n) if air is None else air,
-        air is not None,
-        len(state.knowledge.spot_xy_m) > 0,
-        _empty_l(params),
-        params.low_tank_frac * params.tank_l,
-        0.98 * params.tank_l,
-        params.retreat_c,
-    )
-
-
-@numba.njit(cache=True)
-def _robots_quiet(
-    mode: np.ndarray,
-    tank: FloatArray,
-    alive: BoolArray,
-    damaged: BoolArray,
-    known_damaged: BoolArray,
-    looked: BoolArray,
-    air: FloatArray,
-    has_air: bool,
-    has_spots: bool,
-    empty_l: float,
-    low_l: float,
-    full_l: float,
-    retreat_c: float,
-) -> bool:  # pragma: no cover - compiled
-    """The per-robot tests of :func:`_quiet` in one compiled pass, the comparisons of the
-    full step's (``tactics_step``'s prologue, ``_tank_flags``, ``_too_hot``): no robot
-    newly lost, no look at a known fire, no tank to send to refill or bring back, no
-    robot in air of ``retreat_c``."""
-    for i in range(mode.shape[0]):
-        working = alive[i] and not damaged[i]
-        if not working:
-            if not known_damaged[i]:
-                return False  # newly lost
-            if mode[i] == REFILL and tank[i] >= full_l:
-                return False  # back from refill (whatever its state)
-            continue
-        if has_spots and looked[i]:
-            return False  # a look that may update the knowledge
-        if mode[i] != REFILL and tank[i] <= empty_l:
-            return False
-        if has_spots and (mode[i] == EXPLORE or mode[i] == IDLE) and tank[i] < low_l:
-            return False
-        if mode[i] == REFILL and tank[i] >= full_l:
-            return False
-        if has_air and air[i] >= retreat_c:
-            return False
-    return True
-
-
 def tactics_step(
     state: TacticsState, obs: TacticsObservation, params: TacticsParams, dt_s: float
 ) -> tuple[TacticsState, Orders]:
@@ -651,7 +549,7 @@ def tactics_step(
     """
     if not (math.isfinite(dt_s) and dt_s > 0.0):
         raise InputError(f"dt_s must be > 0, got {dt_s!r}")
-    if _quiet(state, obs, params):  # nothing due, nothing new: the held orders
+    if is_quiet(state, obs, params):  # nothing due, nothing new: the held orders
         return state, state.orders
     start = state
     n = len(state.mode)
