@@ -101,13 +101,21 @@ class CoarseMap:
         hc, wc = self.shape
         return np.stack([np.clip(rc[..., 0], 0, hc - 1), np.clip(rc[..., 1], 0, wc - 1)], -1)
 
+    def _centre_rc(self, cells: IntArray) -> FloatArray:
+        """The map's (fractional) row and column (..., 2) of coarse cells' centres."""
+        out: FloatArray = (np.asarray(cells).astype(float) + 0.5) * self.factor - 0.5
+        return out
+
+    def centre_xy(self, cells: IntArray) -> FloatArray:
+        """Centres [m] (..., 2) of coarse cells (..., 2) (row, col)."""
+        out: FloatArray = self.grid.center_of(self._centre_rc(cells))
+        return out
+
     def goal_xy(self, cells: IntArray) -> FloatArray:
         """The goal point [m] (..., 2) of coarse cells (..., 2) (their centre when not
         standable)."""
         g = self.goal_cell[cells[..., 0], cells[..., 1]]
-        f = self.factor
-        centre = (cells.astype(float) + 0.5) * f - 0.5
-        out: FloatArray = self.grid.center_of(np.where(g[..., :1] >= 0, g, centre))
+        out: FloatArray = self.grid.center_of(np.where(g[..., :1] >= 0, g, self._centre_rc(cells)))
         return out
 
     def node_of(self, xy_m: FloatArray) -> IntArray:

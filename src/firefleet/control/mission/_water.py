@@ -35,14 +35,6 @@ __all__ = [
 ]
 
 
-def _centres(cm: CoarseMap, rows: IntArray, cols: IntArray) -> FloatArray:
-    """Centres [m] (K, 2) of coarse cells."""
-    f = cm.factor
-    rc = np.stack([(rows + 0.5) * f - 0.5, (cols + 0.5) * f - 0.5], axis=-1)
-    out: FloatArray = cm.grid.center_of(rc)
-    return out
-
-
 def cone_cells(
     cm: CoarseMap, pose: FloatArray, range_m: float, half_angle_rad: float
 ) -> tuple[IntArray, IntArray]:
@@ -82,7 +74,7 @@ def cone_cells(
     rows, cols = rr.ravel(), cc.ravel()
     keep = cm.floor[rows, cols]
     rows, cols = rows[keep], cols[keep]
-    xy = _centres(cm, rows, cols)
+    xy = cm.centre_xy(np.stack([rows, cols], axis=-1))
     d = xy - pose[:2]
     dist = np.hypot(d[:, 0], d[:, 1])
     off = np.abs((np.arctan2(d[:, 1], d[:, 0]) - pose[2] + np.pi) % (2 * np.pi) - np.pi)
@@ -170,7 +162,7 @@ def wets_flames(
     if wet_l_m2.shape == cm.shape:
         dry = wet_l_m2[rows, cols] < soak_l_m2
         rows, cols = rows[dry], cols[dry]
-    xy = _centres(cm, rows, cols)
+    xy = cm.centre_xy(np.stack([rows, cols], axis=-1))
     d = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1])
     return bool((d <= radius_m).any())
 
@@ -219,7 +211,7 @@ def front_aim(
     if wet_l_m2.shape == cm.shape:
         keep &= wet_l_m2[rows, cols] < soak_l_m2
     rows, cols = rows[keep], cols[keep]
-    xy = _centres(cm, rows, cols)
+    xy = cm.centre_xy(np.stack([rows, cols], axis=-1))
     rel = xy - pose[:2]
     dist = np.hypot(rel[:, 0], rel[:, 1])
     near_f = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1]).min(axis=1)
