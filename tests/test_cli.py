@@ -21,6 +21,7 @@ from firefleet.cli._main import _parser
 from firefleet.cli._run import report_footer
 from firefleet.outputs import MANIFEST
 from firefleet.report.html import render_index
+from firefleet.sim.registry import task_kind
 
 GOOD = """\
 name: mine
@@ -402,6 +403,19 @@ def test_table_of_a_large_team_shows_min_mean_max_and_claimed_robots(
         assert fragment in printed
     assert "100.5" in printed  # the mean of 1..200
     assert len(printed.splitlines()) < 20
+
+
+def test_table_names_a_list_of_victims_by_victim_not_robot(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    values = [("victims_found_s", [90.5, None]), ("water_used_l", [1.0, 2.0, 3.0])]
+    items = dict(task_kind("mission").list_items)
+    Console(width=80).print(claims_table("t", values, [], items=items))
+    printed = capsys.readouterr().out
+    for fragment in ("[victim 1]", "[victim 2]", "[robot 1]", "[robot 3]", "90.5", "n/a"):
+        assert fragment in printed  # water is per robot
+    assert "[victim 3]" not in printed
+    assert "[robot 1]" not in printed.split("water_used_l")[0]
 
 
 def test_progress_on_a_pipe_is_a_few_plain_lines_on_long_runs() -> None:

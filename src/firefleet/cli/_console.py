@@ -81,13 +81,16 @@ def claims_table(
     claims: Iterable[Mapping[str, Any]],
     *,
     columns: tuple[str, str] = ("metric", "measured"),
+    items: Mapping[str, str] | None = None,
 ) -> Table:
     """One row per named value, with the claims on it and their verdicts; fits 80 columns.
 
     A claim belongs to the row of its name, or of its name before ``[`` (a claim on one
     robot of a per-robot metric, ``name[robot k]``). A per-robot value (a list) gets an
     indented row per robot, or, beyond :data:`ROBOT_ROWS` robots, rows for its minimum,
-    mean and maximum and one per robot a claim names.
+    mean and maximum and one per robot a claim names. ``items`` names what one value of
+    a list is about where it is not a robot (``{"victims_found_s": "victim"}``, a task
+    kind's ``list_items``): its rows read ``[victim k]``.
     """
     claims = list(claims)
     table = Table(title=title, title_justify="left")
@@ -116,18 +119,21 @@ def claims_table(
             ):
                 table.add_row(f"  {name} of {len(value)}", shown(number), "", "")
         robots = range(1, len(value) + 1) if len(value) <= ROBOT_ROWS else sorted(picked)
+        item = (items or {}).get(key, "robot")
         for k in robots:
             label = f"{key}[robot {k}]"
             here = [c for c in mine if c["name"] == label]
             measured = value[k - 1] if k <= len(value) else None
-            table.add_row(escape(f"  [robot {k}]"), shown(measured), *_verdicts(here))
+            table.add_row(escape(f"  [{item} {k}]"), shown(measured), *_verdicts(here))
     return table
 
 
-def metrics_table(document: dict[str, Any]) -> Table:
-    """The claims table of a ``metrics.json`` document."""
+def metrics_table(document: dict[str, Any], items: Mapping[str, str] | None = None) -> Table:
+    """The claims table of a ``metrics.json`` document (``items``: :func:`claims_table`'s)."""
     values = [(k, v) for k, v in document.items() if k not in ("scenario", "claims")]
-    return claims_table(f"{document['scenario']}: metrics and claims", values, document["claims"])
+    return claims_table(
+        f"{document['scenario']}: metrics and claims", values, document["claims"], items=items
+    )
 
 
 ROBOT_ROWS = 5

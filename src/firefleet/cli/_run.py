@@ -34,6 +34,7 @@ from firefleet.scenarios.registry import builtin_names, load_scenario
 from firefleet.scenarios.schema import Scenario, read_scenario_file
 from firefleet.sim.engine import simulate
 from firefleet.sim.metrics import compute_metrics, metrics_document
+from firefleet.sim.registry import task_kind
 
 __all__ = ["add_parsers"]
 
@@ -148,7 +149,8 @@ def cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
             mcap=args.mcap,
             simulator=simulator,
         )
-    out.print(metrics_table(document))
+    items = dict(task_kind(scenario.command.kind).list_items)
+    out.print(metrics_table(document, items))
     out.print(f"wrote {dest}/")
     return EXIT_OK if all_passed(document) else EXIT_CLAIM_FAILED
 

@@ -74,6 +74,9 @@ class TaskKind:
         The kind's own stages (:data:`firefleet.sim.loop.StagesFactory`:
         ``stages(scenario, decider, rng) -> Stages``), instead of
         :func:`~firefleet.sim.loop.default_stages`; such a kind has no fused loop.
+    list_items : tuple of (str, str), optional
+        The list metrics whose values are not one per robot, with what one value is
+        about: ``(("victims_found_s", "victim"),)``. Other lists are per robot.
 
     Examples
     --------
@@ -91,6 +94,7 @@ class TaskKind:
     fused: FusedRun | None = None
     runner: Runner | None = None
     stages: StagesFactory | None = None
+    list_items: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         if (self.decider is None) == (self.runner is None):

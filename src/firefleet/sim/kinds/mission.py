@@ -484,6 +484,7 @@ KINDS = (
             uses_estimate=True,
         ),
         stages=mission_stages,
+        list_items=(("victims_found_s", "victim"), ("stereo_victims_found_s", "victim")),
     ),
 )
 """The mission kind."""
