@@ -160,6 +160,12 @@ class TacticsParams:
         Smallest frontier kept [coarse cells].
     nav : NavigationParams
         The navigation controller's constants.
+    person_peak_max_c : float
+        A person detection whose hottest pixel reads more is a hot surface, not a person
+        [C] (:mod:`._people`: skin is not hotter than the core but in a heat stroke).
+    person_wall_m : float
+        A person detection placed nearer than this to a wall of the plan is the wall
+        [m] (:mod:`._people`: a person's centre stands half a body's depth from it).
     """
 
     standoff_m: float = 1.5
@@ -212,6 +218,9 @@ class TacticsParams:
     keep_bonus_m: float = 2.0
     frontier_min_cells: int = 3
     nav: NavigationParams = field(default_factory=NavigationParams)
+    # people
+    person_peak_max_c: float = 40.0
+    person_wall_m: float = 0.1
 
     def __post_init__(self) -> None:
         check_fields(
@@ -262,8 +271,13 @@ class TacticsParams:
                 "fire_cost",
                 "fire_block_m",
                 "flame_guard_m",
+                "person_wall_m",
             ),
         )
+        if not self.person_peak_max_c > 0.0:  # a NaN too
+            raise InputError(
+                f"tactics.person_peak_max_c must be > 0, got {self.person_peak_max_c}"
+            )
         for name in (
             "confirm_repeats",
             "fire_out_looks",
@@ -320,6 +334,9 @@ class TacticsObservation:
     fire_peak_c : ndarray, shape (K,) or None
         Each fire detection's peak reading [C]; ``None``: not given (every detection
         counts as flames; the fighters aim at flames only).
+    person_peak_c : ndarray, shape (P,) or None
+        Each person detection's peak reading [C]; ``None``: not given (no detection is
+        dropped as too hot to be a person).
     """
 
     t_s: float
@@ -335,6 +352,7 @@ class TacticsObservation:
     looked: BoolArray | None = None
     air_c: FloatArray | None = None
     fire_peak_c: FloatArray | None = None
+    person_peak_c: FloatArray | None = None
 
 
 @dataclass(frozen=True, eq=False)
