@@ -27,6 +27,7 @@ from firefleet.control.mission._params import (
     TacticsObservation,
     TacticsParams,
 )
+from firefleet.control.mission._people import confirm_sight
 from firefleet.control.mission._plan import (
     allocate,
     cut_demand,
@@ -254,6 +255,7 @@ def _orders(
         & (obs.t_s - state.closest_s >= params.stall_s)
     )
     w_max = params.nav.dwa.omega_max_rad_s
+    pending = state.pending
     spray = np.zeros(n, dtype=bool)
     ids, fxy, _ = fires_of(state.knowledge)
     k = state.knowledge
@@ -313,12 +315,27 @@ def _orders(
                 )
     if spray.any():
         state = replace(state, knowledge=replace(k, wet_l_m2=wet))
+    # a confirmer settles only where it can confirm its victim; elsewhere it is sent to a
+    # new viewpoint (the next plan; ``_people.confirm_sight``)
+    lost = np.flatnonzero(settle & (mode == CONFIRM))
+    if len(lost):
+        sees = confirm_sight(
+            state.coarse,
+            pose[lost, :2],
+            k.victim_xy_m[state.task_victim[lost]],
+            params.sensing_near_m,
+            params.confirm_radius_m,
+        )
+        lost = lost[~sees]
+        settle[lost] = False
+        goals = goals.copy()
+        goals[lost] = np.nan
+        pending = pending or len(lost) > 0
     if settle.any():
         nav = navigation_retarget(nav, pose[:, :2], settle)
         at_goal = at_goal | settle
     # a fighter that has stood without a shot for reslot_s gets a new slot (next plan)
     reslot = (mode == FIGHT) & at_goal & (obs.t_s - shot_s >= params.reslot_s)
-    pending = state.pending
     if reslot.any():
         goals = goals.copy()
         goals[reslot] = np.nan
