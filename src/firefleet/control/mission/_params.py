@@ -166,6 +166,9 @@ class TacticsParams:
     person_wall_m : float
         A person detection placed nearer than this to a wall of the plan is the wall
         [m] (:mod:`._people`: a person's centre stands half a body's depth from it).
+    confirm_watch_s : float
+        A confirmer that has stood this long where it can confirm its victim without
+        confirming gives the victim up [s] (:func:`._knowledge.watch_victims`).
     """
 
     standoff_m: float = 1.5
@@ -220,7 +223,8 @@ class TacticsParams:
     nav: NavigationParams = field(default_factory=NavigationParams)
     # people
     person_peak_max_c: float = 40.0
-    person_wall_m: float = 0.1
+    person_wall_m: float = 0.15
+    confirm_watch_s: float = 15.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -271,13 +275,15 @@ class TacticsParams:
                 "fire_cost",
                 "fire_block_m",
                 "flame_guard_m",
-                "person_wall_m",
             ),
         )
-        if not self.person_peak_max_c > 0.0:  # a NaN too
-            raise InputError(
-                f"tactics.person_peak_max_c must be > 0, got {self.person_peak_max_c}"
-            )
+        # people
+        check_fields(
+            self,
+            "tactics",
+            positive=("person_peak_max_c", "confirm_watch_s"),
+            non_negative=("person_wall_m",),
+        )
         for name in (
             "confirm_repeats",
             "fire_out_looks",

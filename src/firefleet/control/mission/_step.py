@@ -15,7 +15,7 @@ from firefleet.control.mission._coverage import (
     viewpoints,
 )
 from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
-from firefleet.control.mission._knowledge import fires_of, update_knowledge
+from firefleet.control.mission._knowledge import fires_of, update_knowledge, watch_victims
 from firefleet.control.mission._params import (
     CONFIRM,
     DAMAGED,
@@ -341,11 +341,24 @@ def _orders(
         goals[reslot] = np.nan
         shot_s[reslot] = obs.t_s
         pending = True
-    for i in map(int, np.flatnonzero((mode == CONFIRM) & at_goal)):
+    watching = np.flatnonzero((mode == CONFIRM) & at_goal)
+    for i in map(int, watching):
         vic = k.victim_xy_m[state.task_victim[i]]
         err = float(_wrap(np.arctan2(vic[1] - pose[i, 1], vic[0] - pose[i, 0]) - pose[i, 2]))
         v[i] = 0.0
         w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
+    if len(watching):  # a victim watched too long without confirmation is given up
+        know, gave_up = watch_victims(
+            state.knowledge,
+            state.coarse,
+            pose,
+            watching,
+            state.task_victim[watching],
+            params.nav_period_s,
+            params,
+        )
+        state = replace(state, knowledge=know)
+        pending = pending or gave_up
     scan = (mode == EXPLORE) & arrived
     v[scan] = 0.0
     w[scan] = params.scan_omega_rad_s
