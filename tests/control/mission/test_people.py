@@ -4,12 +4,21 @@ mission's renderer draws and the real detector reads."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from firefleet.control.mission import CoarseMap, TacticsParams, tactics_init
-from firefleet.control.mission._knowledge import empty_knowledge, update_knowledge
+from firefleet.control.mission import (
+    CoarseMap,
+    Knowledge,
+    TacticsObservation,
+    TacticsParams,
+    tactics_init,
+    tactics_step,
+)
+from firefleet.control.mission._knowledge import empty_knowledge, update_knowledge, watch_victims
+from firefleet.control.mission._params import CONFIRM, EXPLORE
 from firefleet.control.mission._people import behind_wall, person_plausible, wall_distance
 from firefleet.errors import InputError
 
@@ -168,3 +177,144 @@ def test_the_knowledge_takes_no_victim_from_a_wall() -> None:
     )
     assert changed
     np.testing.assert_allclose(k.victim_xy_m, [[12.0, 2.05]])
+
+
+def _obs(t: float, pose: np.ndarray, people: np.ndarray, robot: np.ndarray) -> TacticsObservation:
+    n = len(pose)
+    return TacticsObservation(
+        t_s=t,
+        pose_m=pose,
+        fire_xy_m=np.zeros((0, 2)),
+        fire_robot=np.zeros(0, dtype=np.int64),
+        person_xy_m=people.reshape(-1, 2),
+        person_robot=robot,
+        ranges={},
+        tank_l=np.full(n, P.tank_l),
+        damaged=np.zeros(n, bool),
+        alive=np.ones(n, bool),
+    )
+
+
+def _confirm_run(
+    params: TacticsParams, duration_s: float, ghost_every: bool
+) -> tuple[list[int], Knowledge]:
+    """Two robots held still in a 12 m x 10 m room: robot 0 4 m from a "person" robot 1
+    names from 5 m away at every tick (a false detection nobody confirms: robot 0's
+    own camera sees nothing there). Returns robot 0's mode at each tick."""
+    from tests.control.mission.test_team import room
+
+    pose = np.array([[3.6, 5.0, 0.0], [6.0, 9.0, -math.pi / 2]])
+    ghost = np.array([[6.0, 4.0]])
+    state = tactics_init(room(), pose, params)
+    modes = []
+    for k in range(round(duration_s / 0.1)):
+        t = round(0.1 * k, 9)
+        people = ghost if ghost_every or k == 0 else np.zeros((0, 2))
+        robot = np.ones(len(people), dtype=np.int64)
+        state, orders = tactics_step(state, _obs(t, pose, people, robot), params, 0.1)
+        modes.append(int(orders.mode[0]))
+    return modes, state.knowledge
+
+
+def test_a_confirmer_gives_up_a_person_it_watches_without_confirming() -> None:
+    """Robot 0 is sent to confirm; held still 2.6 m from the "person" (in sight, within
+    the confirmation radius) it settles after ``stall_s`` and watches; after
+    ``confirm_watch_s`` of watching it gives the victim up and explores. Without the
+    clock (the code before) it confirms forever: each far detection resets the misses
+    its own looks count (mission-office seed 1: 360 s)."""
+    p = TacticsParams(confirm_radius_m=3.0)
+    modes, k = _confirm_run(p, 40.0, ghost_every=True)
+    first = modes.index(CONFIRM)
+    assert first < 15
+    left = first + modes[first:].index(EXPLORE)
+    # settles after stall_s, then watches confirm_watch_s (at the 10 Hz orders)
+    assert (
+        (p.stall_s + p.confirm_watch_s) / 0.1
+        <= left - first
+        <= (p.stall_s + p.confirm_watch_s + 2.0) / 0.1
+    )
+    assert k.victim_given_up.tolist() == [True]
+    assert not k.victim_confirmed[0]
+    never = TacticsParams(confirm_radius_m=3.0, confirm_watch_s=1e6)
+    modes, k = _confirm_run(never, 40.0, ghost_every=True)
+    assert modes[-1] == CONFIRM
+    assert not k.dismissed(never)[0]
+
+
+def test_watch_clock_runs_only_in_sight_and_a_close_detection_still_confirms() -> None:
+    from tests.control.mission.test_team import room
+
+    state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
+    cm = state.coarse
+    k, _ = update_knowledge(
+        empty_knowledge(),
+        cm,
+        np.array([[1.0, 5.0, 0.0]]),
+        np.zeros((0, 2)),
+        np.zeros(0, dtype=np.int64),
+        np.array([[6.0, 5.0]]),
+        np.array([0]),
+        np.zeros(1, bool),
+        0.0,
+        P,
+    )
+    one = np.array([0])
+    far = np.array([[1.0, 5.0, 0.0]])  # 5 m: beyond the confirmation radius
+    for _ in range(200):
+        k, gave = watch_victims(k, cm, far, one, np.array([0]), 0.1, P)
+        assert not gave
+    assert k.victim_watch_s.tolist() == [0.0]
+    near = np.array([[4.0, 5.0, 0.0]])  # 2 m: in sight
+    steps = 0
+    while not k.victim_given_up[0]:
+        k, gave = watch_victims(k, cm, near, one, np.array([0]), 0.1, P)
+        steps += 1
+    assert gave
+    assert steps == round(P.confirm_watch_s / 0.1)
+    assert k.dismissed(P)[0]
+    # a detection from afar does not bring it back; two from within 2 m confirm it
+    pose = np.array([[0.5, 5.0, 0.0], [4.2, 5.0, 0.0]])
+    for r, c in ((0, False), (1, False), (1, True)):
+        k, _ = update_knowledge(
+            k,
+            cm,
+            pose,
+            np.zeros((0, 2)),
+            np.zeros(0, dtype=np.int64),
+            np.array([[6.0, 5.0]]),
+            np.array([r]),
+            np.zeros(2, bool),
+            1.0,
+            P,
+        )
+        assert bool(k.victim_confirmed[0]) is c
+        assert bool(k.dismissed(P)[0]) is (not c)
+
+
+def test_a_confirmer_held_up_behind_a_wall_does_not_settle_there() -> None:
+    """Office: a person seen at (12, 2) through the south-middle room's door by robot 1,
+    which is then damaged; robot 0, in the corridor 2.9 m away behind the room's wall,
+    is sent to confirm and held still. It used to settle there after ``stall_s`` (and
+    stand for good); it is sent to a viewpoint again, and its watch clock never runs."""
+    from firefleet.world import load_map
+
+    pose = np.array([[10.0, 4.7, 0.0], [12.5, 4.7, math.atan2(-2.7, -0.5)]])
+    state = tactics_init(load_map("office"), pose, P)
+    for k in range(round(30.0 / 0.1)):
+        t = round(0.1 * k, 9)
+        obs = _obs(
+            t,
+            pose,
+            np.array([[12.0, 2.0]]) if k == 0 else np.zeros((0, 2)),
+            np.ones(1 if k == 0 else 0, dtype=np.int64),
+        )
+        if k > 0:
+            obs = replace(obs, damaged=np.array([False, True]))
+        state, orders = tactics_step(state, obs, P, 0.1)
+        if t > P.stall_s + 1.0:
+            assert orders.mode[0] == CONFIRM
+            assert state.nav.status[0] != "arrived"
+    goal = state.goal_xy_m[0]
+    assert np.isfinite(goal).all()
+    assert 1.5 <= np.hypot(*(goal - [12.0, 2.0])) <= P.confirm_radius_m
+    assert state.knowledge.victim_watch_s.tolist() == [0.0]

@@ -470,14 +470,13 @@ def watch_victims(
         cm,
         pose[confirmers, :2],
         k.victim_xy_m[victims],
-        params.sensing_near_m,
-        params.confirm_radius_m,
+        params,
     )
     if not sees.any():
         return k, False
     watch = k.victim_watch_s.copy()
     np.add.at(watch, victims[sees], dt_s)
-    late = (watch >= params.confirm_watch_s) & ~k.victim_confirmed & ~k.victim_given_up
+    late = (watch >= params.confirm_watch_s - 1e-9) & ~k.victim_confirmed & ~k.victim_given_up
     if late.any():
         return replace(k, victim_watch_s=watch, victim_given_up=k.victim_given_up | late), True
     return replace(k, victim_watch_s=watch), False

@@ -36,6 +36,7 @@ import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.mission._coverage import CoarseMap
+from firefleet.control.mission._params import TacticsParams
 from firefleet.errors import InputError
 
 __all__ = ["behind_wall", "confirm_sight", "person_plausible", "wall_distance"]
@@ -171,12 +172,14 @@ def person_plausible(
 
 
 def confirm_sight(
-    cm: CoarseMap, robot_xy_m: FloatArray, victim_xy_m: FloatArray, near_m: float, far_m: float
+    cm: CoarseMap, robot_xy_m: FloatArray, victim_xy_m: FloatArray, params: TacticsParams
 ) -> BoolArray:
     """Whether a confirmer standing at each robot position (M, 2) can confirm its victim
-    (M, 2): from ``near_m`` (the camera's nearest range for a whole person) to ``far_m``
-    (the confirmation radius) away, with no wall between (the confirmer turns to face
-    the victim where it stands).
+    (M, 2): from the camera's nearest range for a whole person (``sensing_near_m``, or
+    half a metre inside the confirmation radius when that is nearer: the plan's
+    viewpoints lie from ``min(sensing_near_m + 0.25, confirm_radius_m - 0.25)`` on) to
+    ``confirm_radius_m`` away, with no wall between (the confirmer turns to face the
+    victim where it stands).
 
     A confirmer held up on its way (a teammate in a door, a detour) used to settle
     where it stood wherever that was; on mission-office seed 1 one settled 6 m from its
@@ -187,15 +190,17 @@ def confirm_sight(
     >>> import numpy as np
     >>> from firefleet.world import load_map
     >>> from firefleet.control.mission import TacticsParams, tactics_init
-    >>> cm = tactics_init(load_map("office"), [[1.0, 1.5, 0.0]], TacticsParams()).coarse
+    >>> p = TacticsParams(confirm_radius_m=3.0)
+    >>> cm = tactics_init(load_map("office"), [[1.0, 1.5, 0.0]], p).coarse
     >>> robot = np.array([[12.5, 4.5], [10.0, 4.5], [12.2, 3.0], [17.9, 4.6]])
-    >>> confirm_sight(cm, robot, np.array([[12.0, 2.0]] * 4), 2.0, 3.0).tolist()
+    >>> confirm_sight(cm, robot, np.array([[12.0, 2.0]] * 4), p).tolist()
     [True, False, False, False]
     """
+    near_m = min(params.sensing_near_m, params.confirm_radius_m - 0.5)
     a = np.asarray(robot_xy_m, dtype=float).reshape(-1, 2)
     b = np.asarray(victim_xy_m, dtype=float).reshape(-1, 2)
     d = np.hypot(*(b - a).T)
-    out: BoolArray = (d >= near_m) & (d <= far_m)
+    out: BoolArray = (d >= near_m) & (d <= params.confirm_radius_m)
     if out.any():
         idx = np.flatnonzero(out)
         out[idx] = ~behind_wall(cm, a[idx], b[idx])

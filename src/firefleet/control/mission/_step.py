@@ -323,8 +323,7 @@ def _orders(
             state.coarse,
             pose[lost, :2],
             k.victim_xy_m[state.task_victim[lost]],
-            params.sensing_near_m,
-            params.confirm_radius_m,
+            params,
         )
         lost = lost[~sees]
         settle[lost] = False
