@@ -94,7 +94,9 @@ def test_a_hot_wall_the_detector_names_a_person_is_dropped_and_a_person_by_it_ke
     assert len(wall) >= 3  # the detector is fooled from every pose
     wxy = np.array([d[:2] for d in wall])
     wpeak = np.array([d[2] for d in wall])
-    assert not person_plausible(cm, np.array(wall_robot)[:, :2], wxy, None, 40.0, 0.1).any()
+    assert not person_plausible(
+        cm, np.array(wall_robot)[:, :2], wxy, None, P.person_peak_max_c, P.person_wall_m
+    ).any()
     assert (wpeak > 40.0).all()  # and too hot for skin besides
     cool = np.full(x.shape, 20.0)
     people = [
@@ -108,7 +110,14 @@ def test_a_hot_wall_the_detector_names_a_person_is_dropped_and_a_person_by_it_ke
         assert len(named) == 1, (pose, xy)
         pxy = np.array([named[0][:2]])
         assert np.hypot(*(pxy[0] - xy)) < 0.2
-        keep = person_plausible(cm, np.array([pose[:2]]), pxy, np.array([named[0][2]]), 40.0, 0.1)
+        keep = person_plausible(
+            cm,
+            np.array([pose[:2]]),
+            pxy,
+            np.array([named[0][2]]),
+            P.person_peak_max_c,
+            P.person_wall_m,
+        )
         assert keep.tolist() == [True], (pose, xy, pxy)
 
 
