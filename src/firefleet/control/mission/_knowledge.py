@@ -11,8 +11,8 @@ the team holds one knowledge, the union of all detections (each detection a mess
   cone, within ``sensing_range_m``, in line of sight) and saw no fire within
   ``fire_merge_m``; a fire without spots is out. A fire's position is the mean of its
   spots, its extent the largest distance of a spot from it;
-- a *victim* is a person detection that can be a person (not too hot, not on a wall
-  of the plan, not behind one: :mod:`._people`); later ones within ``victim_merge_m``
+- a *victim* is a person detection that can be a person (not on a wall of the plan,
+  not behind one: :mod:`._people`); later ones within ``victim_merge_m``
   refine its position (running mean). It is *confirmed* once ``confirm_repeats`` detections of it
   came from robots within ``confirm_radius_m`` (2 m, the issue's rule) of it.
 """
@@ -289,7 +289,6 @@ def update_knowledge(
     t_s: float,
     params: TacticsParams,
     fire_peak_c: FloatArray | None = None,
-    person_peak_c: FloatArray | None = None,
 ) -> tuple[Knowledge, bool]:
     """This tick's detections and looks into the knowledge (module notes).
 
@@ -311,10 +310,6 @@ def update_knowledge(
     fire_peak_c : ndarray, shape (K,), optional
         Each fire detection's peak reading [C] (``flame_c`` or more: flames; not given:
         every detection is flames).
-    person_peak_c : ndarray, shape (P,), optional
-        Each person detection's peak reading [C]. Person detections that cannot be a
-        person (too hot, on a wall of the plan, behind one: :mod:`._people`) are
-        dropped before anything else.
 
     Returns
     -------
@@ -324,14 +319,9 @@ def update_knowledge(
     """
     changed = False
     if len(person_xy):
-        keep = person_plausible(
-            cm,
-            pose[person_robot, :2],
-            person_xy,
-            person_peak_c,
-            params.person_peak_max_c,
-            params.person_wall_m,
-        )
+        # person detections that cannot be a person (on a wall of the plan, behind
+        # one: :mod:`._people`) go before anything else
+        keep = person_plausible(cm, pose[person_robot, :2], person_xy, params.person_wall_m)
         if not keep.all():
             person_xy, person_robot = person_xy[keep], person_robot[keep]
     flames = (

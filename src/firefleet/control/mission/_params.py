@@ -160,9 +160,6 @@ class TacticsParams:
         Smallest frontier kept [coarse cells].
     nav : NavigationParams
         The navigation controller's constants.
-    person_peak_max_c : float
-        A person detection whose hottest pixel reads more is a hot surface, not a person
-        [C] (:mod:`._people`: skin is not hotter than the core but in a heat stroke).
     person_wall_m : float
         A person detection placed nearer than this to a wall of the plan is the wall
         [m] (:mod:`._people`: a person's centre stands half a body's depth from it).
@@ -222,7 +219,6 @@ class TacticsParams:
     frontier_min_cells: int = 3
     nav: NavigationParams = field(default_factory=NavigationParams)
     # people
-    person_peak_max_c: float = 40.0
     person_wall_m: float = 0.15
     confirm_watch_s: float = 15.0
 
@@ -281,7 +277,7 @@ class TacticsParams:
         check_fields(
             self,
             "tactics",
-            positive=("person_peak_max_c", "confirm_watch_s"),
+            positive=("confirm_watch_s",),
             non_negative=("person_wall_m",),
         )
         for name in (
@@ -340,9 +336,6 @@ class TacticsObservation:
     fire_peak_c : ndarray, shape (K,) or None
         Each fire detection's peak reading [C]; ``None``: not given (every detection
         counts as flames; the fighters aim at flames only).
-    person_peak_c : ndarray, shape (P,) or None
-        Each person detection's peak reading [C]; ``None``: not given (no detection is
-        dropped as too hot to be a person).
     """
 
     t_s: float
@@ -358,7 +351,6 @@ class TacticsObservation:
     looked: BoolArray | None = None
     air_c: FloatArray | None = None
     fire_peak_c: FloatArray | None = None
-    person_peak_c: FloatArray | None = None
 
 
 @dataclass(frozen=True, eq=False)

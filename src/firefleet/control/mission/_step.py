@@ -607,7 +607,6 @@ def tactics_step(
             t,
             params,
             None if obs.fire_peak_c is None else np.asarray(obs.fire_peak_c, dtype=float),
-            None if obs.person_peak_c is None else np.asarray(obs.person_peak_c, dtype=float),
         )
         state = replace(
             state,

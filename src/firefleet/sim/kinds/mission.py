@@ -367,7 +367,7 @@ def mission_decide(
         return state, WheelCommand(reference_rad_s=np.zeros((n, 2)), series=idle)
     rows = np.asarray(inputs.readings["thermal_detections"]).reshape(-1, 5)
     fire_xy, fire_robot, fire_peak = _on_map(rows, pose, FIRE)
-    person_xy, person_robot, person_peak = _on_map(rows, pose, PERSON)
+    person_xy, person_robot, _ = _on_map(rows, pose, PERSON)
     damaged = np.asarray(inputs.readings["damaged"]) > 0.5
     ranges = {
         name: (inputs.readings[name], bearings)
@@ -388,7 +388,6 @@ def mission_decide(
         alive=~damaged,
         looked=looked,
         fire_peak_c=fire_peak,
-        person_peak_c=person_peak,
         air_c=np.asarray(inputs.readings["air_c"], dtype=float)
         if "air_c" in inputs.readings
         else None,
