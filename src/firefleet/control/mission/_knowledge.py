@@ -12,9 +12,13 @@ the team holds one knowledge, the union of all detections (each detection a mess
   ``fire_merge_m``; a fire without spots is out. A fire's position is the mean of its
   spots, its extent the largest distance of a spot from it;
 - a *victim* is a person detection that can be a person (not on a wall of the plan,
-  not behind one: :mod:`._people`); later ones within ``victim_merge_m``
-  refine its position (running mean). It is *confirmed* once ``confirm_repeats`` detections of it
-  came from robots within ``confirm_radius_m`` (2 m, the issue's rule) of it.
+  not behind one: :mod:`._people`); later ones within ``victim_merge_m`` refine its
+  position (running mean). It is *confirmed* once ``confirm_repeats`` detections of it
+  came from robots within ``confirm_radius_m`` (2 m, the issue's rule) of it. An
+  unconfirmed victim is *dismissed* after ``victim_out_looks`` looks at it that saw no
+  person there (until detected again), or *given up* once a confirmer has stood
+  ``confirm_watch_s`` where it could confirm it (:func:`watch_victims`; only a
+  confirmation brings it back).
 """
 
 from __future__ import annotations
