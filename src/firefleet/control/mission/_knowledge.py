@@ -11,9 +11,14 @@ the team holds one knowledge, the union of all detections (each detection a mess
   cone, within ``sensing_range_m``, in line of sight) and saw no fire within
   ``fire_merge_m``; a fire without spots is out. A fire's position is the mean of its
   spots, its extent the largest distance of a spot from it;
-- a *victim* is a person detection; later ones within ``victim_merge_m`` refine its
+- a *victim* is a person detection that can be a person (not on a wall of the plan,
+  not behind one: :mod:`._people`); later ones within ``victim_merge_m`` refine its
   position (running mean). It is *confirmed* once ``confirm_repeats`` detections of it
-  came from robots within ``confirm_radius_m`` (2 m, the issue's rule) of it.
+  came from robots within ``confirm_radius_m`` (2 m, the issue's rule) of it. An
+  unconfirmed victim is *dismissed* after ``victim_out_looks`` looks at it that saw no
+  person there (until detected again), or *given up* once a confirmer has stood
+  ``confirm_watch_s`` where it could confirm it (:func:`watch_victims`; only a
+  confirmation brings it back).
 """
 
 from __future__ import annotations
@@ -26,9 +31,10 @@ import numpy as np
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap, in_view, line_of_sight
 from firefleet.control.mission._params import TacticsParams
+from firefleet.control.mission._people import confirm_sight, person_plausible
 from firefleet.control.mission._water import soaked_at
 
-__all__ = ["Knowledge", "empty_knowledge", "fires_of", "update_knowledge"]
+__all__ = ["Knowledge", "empty_knowledge", "fires_of", "update_knowledge", "watch_victims"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,6 +71,12 @@ class Knowledge:
     wet_l_m2 : ndarray, shape (Hc, Wc) or (0, 0)
         The team's ledger of the water it sprayed on the coarse cells [L/m^2]
         (:mod:`._water`; (0, 0) before the first spray).
+    victim_watch_s : ndarray, shape (V,)
+        Time a confirmer has stood where it can confirm each (:func:`watch_victims`) [s].
+    victim_given_up : ndarray of bool, shape (V,)
+        Unconfirmed victims a confirmer watched for ``confirm_watch_s`` without
+        confirming: no robot is sent to them again (a detection from within the
+        confirmation radius still confirms them).
     """
 
     spot_xy_m: FloatArray
@@ -78,6 +90,8 @@ class Knowledge:
     victim_confirmed_s: FloatArray
     victim_misses: IntArray
     wet_l_m2: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
+    victim_watch_s: FloatArray = field(default_factory=lambda: np.zeros(0))
+    victim_given_up: BoolArray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     @property
     def victim_confirmed(self) -> BoolArray:
@@ -86,8 +100,11 @@ class Knowledge:
         return out
 
     def dismissed(self, params: TacticsParams) -> BoolArray:
-        """Unconfirmed victims dismissed as false detections, shape (V,)."""
-        out: BoolArray = ~self.victim_confirmed & (self.victim_misses >= params.victim_out_looks)
+        """Unconfirmed victims dismissed as false detections (looked at without a
+        person there, or given up by a confirmer), shape (V,)."""
+        out: BoolArray = ~self.victim_confirmed & (
+            (self.victim_misses >= params.victim_out_looks) | self.victim_given_up
+        )
         return out
 
 
@@ -186,7 +203,7 @@ def _add_person(
             if new:
                 conf[j] = t_s
             misses = k.victim_misses.copy()
-            back = bool(misses[j] >= params.victim_out_looks)
+            back = bool(misses[j] >= params.victim_out_looks) and not k.victim_given_up[j]
             misses[j] = 0
             return replace(
                 k,
@@ -204,6 +221,8 @@ def _add_person(
         victim_close=np.append(k.victim_close, int(close)),
         victim_confirmed_s=np.append(k.victim_confirmed_s, conf_s),
         victim_misses=np.append(k.victim_misses, 0),
+        victim_watch_s=np.append(k.victim_watch_s, 0.0),
+        victim_given_up=np.append(k.victim_given_up, False),
     ), True
 
 
@@ -303,6 +322,12 @@ def update_knowledge(
         A fire or a victim appeared, merged, went out or was confirmed.
     """
     changed = False
+    if len(person_xy):
+        # person detections that cannot be a person (on a wall of the plan, behind
+        # one: :mod:`._people`) go before anything else
+        keep = person_plausible(cm, pose[person_robot, :2], person_xy, params.person_wall_m)
+        if not keep.all():
+            person_xy, person_robot = person_xy[keep], person_robot[keep]
     flames = (
         np.ones(len(fire_xy), dtype=bool) if fire_peak_c is None else fire_peak_c >= params.flame_c
     )
@@ -394,3 +419,58 @@ def _victim_looks(
     misses = k.victim_misses + seen
     dismissed = (misses == params.victim_out_looks) & seen
     return replace(k, victim_misses=misses), bool(dismissed.any())
+
+
+def watch_victims(
+    k: Knowledge,
+    cm: CoarseMap,
+    pose: FloatArray,
+    confirmers: IntArray,
+    victims: IntArray,
+    dt_s: float,
+    params: TacticsParams,
+) -> tuple[Knowledge, bool]:
+    """Confirmers standing at their victims: each one's watch clock runs while it stands
+    where it can confirm them (:func:`._people.confirm_sight`); an unconfirmed victim
+    watched for ``confirm_watch_s`` is given up (``Knowledge.victim_given_up``).
+
+    A person in sight of a confirmer is named within a frame or two (9 Hz), so a watch of
+    seconds without confirmation is a false detection that keeps coming back (the
+    misses a look counts are reset by each new detection near it): on mission-office
+    seed 1 a robot stood 360 s on one.
+
+    Parameters
+    ----------
+    k : Knowledge
+    cm : CoarseMap
+    pose : ndarray, shape (N, 3)
+    confirmers : ndarray of int, shape (M,)
+        Robots standing at their victims (arrived or settled), facing them.
+    victims : ndarray of int, shape (M,)
+        Their victims.
+    dt_s : float
+        Time since the last call [s].
+    params : TacticsParams
+
+    Returns
+    -------
+    Knowledge
+    given_up : bool
+        A victim was given up.
+    """
+    if len(confirmers) == 0:
+        return k, False
+    sees = confirm_sight(
+        cm,
+        pose[confirmers, :2],
+        k.victim_xy_m[victims],
+        params,
+    )
+    if not sees.any():
+        return k, False
+    watch = k.victim_watch_s.copy()
+    np.add.at(watch, victims[sees], dt_s)
+    late = (watch >= params.confirm_watch_s - 1e-9) & ~k.victim_confirmed & ~k.victim_given_up
+    if late.any():
+        return replace(k, victim_watch_s=watch, victim_given_up=k.victim_given_up | late), True
+    return replace(k, victim_watch_s=watch), False

@@ -160,6 +160,12 @@ class TacticsParams:
         Smallest frontier kept [coarse cells].
     nav : NavigationParams
         The navigation controller's constants.
+    person_wall_m : float
+        A person detection placed nearer than this to a wall of the plan is the wall
+        [m] (:mod:`._people`: a person's centre stands half a body's depth from it).
+    confirm_watch_s : float
+        A confirmer that has stood this long where it can confirm its victim without
+        confirming gives the victim up [s] (:func:`._knowledge.watch_victims`).
     """
 
     standoff_m: float = 1.5
@@ -212,6 +218,9 @@ class TacticsParams:
     keep_bonus_m: float = 2.0
     frontier_min_cells: int = 3
     nav: NavigationParams = field(default_factory=NavigationParams)
+    # people
+    person_wall_m: float = 0.15
+    confirm_watch_s: float = 15.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -263,6 +272,13 @@ class TacticsParams:
                 "fire_block_m",
                 "flame_guard_m",
             ),
+        )
+        # people
+        check_fields(
+            self,
+            "tactics",
+            positive=("confirm_watch_s",),
+            non_negative=("person_wall_m",),
         )
         for name in (
             "confirm_repeats",

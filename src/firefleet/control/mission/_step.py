@@ -15,7 +15,7 @@ from firefleet.control.mission._coverage import (
     viewpoints,
 )
 from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
-from firefleet.control.mission._knowledge import fires_of, update_knowledge
+from firefleet.control.mission._knowledge import fires_of, update_knowledge, watch_victims
 from firefleet.control.mission._params import (
     CONFIRM,
     DAMAGED,
@@ -27,6 +27,7 @@ from firefleet.control.mission._params import (
     TacticsObservation,
     TacticsParams,
 )
+from firefleet.control.mission._people import confirm_sight
 from firefleet.control.mission._plan import (
     allocate,
     cut_demand,
@@ -254,6 +255,7 @@ def _orders(
         & (obs.t_s - state.closest_s >= params.stall_s)
     )
     w_max = params.nav.dwa.omega_max_rad_s
+    pending = state.pending
     spray = np.zeros(n, dtype=bool)
     ids, fxy, _ = fires_of(state.knowledge)
     k = state.knowledge
@@ -313,22 +315,49 @@ def _orders(
                 )
     if spray.any():
         state = replace(state, knowledge=replace(k, wet_l_m2=wet))
+    # a confirmer settles only where it can confirm its victim; elsewhere it is sent to a
+    # new viewpoint (the next plan; ``_people.confirm_sight``)
+    lost = np.flatnonzero(settle & (mode == CONFIRM))
+    if len(lost):
+        sees = confirm_sight(
+            state.coarse,
+            pose[lost, :2],
+            k.victim_xy_m[state.task_victim[lost]],
+            params,
+        )
+        lost = lost[~sees]
+        settle[lost] = False
+        goals = goals.copy()
+        goals[lost] = np.nan
+        pending = pending or len(lost) > 0
     if settle.any():
         nav = navigation_retarget(nav, pose[:, :2], settle)
         at_goal = at_goal | settle
     # a fighter that has stood without a shot for reslot_s gets a new slot (next plan)
     reslot = (mode == FIGHT) & at_goal & (obs.t_s - shot_s >= params.reslot_s)
-    pending = state.pending
     if reslot.any():
         goals = goals.copy()
         goals[reslot] = np.nan
         shot_s[reslot] = obs.t_s
         pending = True
-    for i in map(int, np.flatnonzero((mode == CONFIRM) & at_goal)):
+    watching = np.flatnonzero((mode == CONFIRM) & at_goal)
+    for i in map(int, watching):
         vic = k.victim_xy_m[state.task_victim[i]]
         err = float(_wrap(np.arctan2(vic[1] - pose[i, 1], vic[0] - pose[i, 0]) - pose[i, 2]))
         v[i] = 0.0
         w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
+    if len(watching):  # a victim watched too long without confirmation is given up
+        know, gave_up = watch_victims(
+            state.knowledge,
+            state.coarse,
+            pose,
+            watching,
+            state.task_victim[watching],
+            params.nav_period_s,
+            params,
+        )
+        state = replace(state, knowledge=know)
+        pending = pending or gave_up
     scan = (mode == EXPLORE) & arrived
     v[scan] = 0.0
     w[scan] = params.scan_omega_rad_s
