@@ -34,7 +34,7 @@ import dataclasses
 import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -180,7 +180,13 @@ class OdometryState:
 
 @dataclass(frozen=True)
 class Odometry:
-    """Pose estimate by dead reckoning: the encoders' count differences, nominal geometry."""
+    """Pose estimate by dead reckoning: the encoders' count differences, nominal geometry.
+
+    ``arc_odometry``: its step is the arc of the count differences that the quiet
+    stretch computes (:func:`_stretch_ok`); a subclass declares it itself.
+    """
+
+    arc_odometry: ClassVar[bool] = True
 
     def init(self, pose: FloatArray, drive: DriveState) -> OdometryState:
         """The estimate at the start: the true start poses."""
@@ -308,6 +314,13 @@ class WheelCommand:
 DecideStep = Callable[[Any, DecideInputs, Any, float], tuple[Any, WheelCommand]]
 """``new_state, command = decide(state, inputs, params, dt_s)``."""
 
+QuietTicks = Callable[[Any, DecideInputs, Any, int, float, int], int]
+"""``m = quiet_ticks(state, inputs, params, k, dt_s, limit)``: after a tick (its
+``inputs``) whose decision returned its state object unchanged (nothing new), how many
+of the ticks ``k, k + 1, ...`` (at most ``limit``) it would answer the same way, the same
+state and the same command, with the same readings, inbox and no new pose but the time
+(the stages see to that: :func:`_stretch_ok`)."""
+
 
 @dataclass(frozen=True)
 class Decider:
@@ -326,12 +339,16 @@ class Decider:
     uses_estimate : bool
         Whether ``decide`` reads ``pose_estimate`` (the default stages then include
         odometry).
+    quiet_ticks : callable, optional
+        The decision's quiet ticks (:data:`QuietTicks`) for the staged loop's quiet
+        stretches; None: none.
     """
 
     init: Callable[[Scenario], tuple[Any, Any]]
     decide: DecideStep
     series: tuple[str, ...] = ()
     uses_estimate: bool = False
+    quiet_ticks: QuietTicks | None = None
 
 
 FusedRun = Callable[[Scenario, FloatArray, NDArray[np.int64], "ProgressCallback | None"], SimResult]
@@ -462,7 +479,16 @@ def run_loop(
     drive = drive_init(scenario.initial_poses, phase, stack)
     state, params = decider.init(scenario)
     rec = run_staged(
-        drive, stack, stg, decider.decide, state, params, rec_steps, n_steps, progress=progress
+        drive,
+        stack,
+        stg,
+        decider.decide,
+        state,
+        params,
+        rec_steps,
+        n_steps,
+        progress=progress,
+        quiet=decider.quiet_ticks,
     )
     return SimResult(
         scenario=scenario,
@@ -494,6 +520,7 @@ def run_staged(
     *,
     progress: ProgressCallback | None = None,
     rng: np.random.Generator | None = None,
+    quiet: QuietTicks | None = None,
 ) -> Recording:
     """The staged loop: ticks 0 .. ``n_steps``, each stage a function on arrays.
 
@@ -516,6 +543,11 @@ def run_staged(
         ``progress(done, total)`` after each chunk of ticks.
     rng : numpy.random.Generator, optional
         Draws the wheels' slip in each drive step (:func:`drive_step`); None: no slip.
+    quiet : callable, optional
+        The decision's quiet ticks (:data:`QuietTicks`): with it, and stages that know
+        theirs (:func:`_stretch_ok`), the ticks where only the wheels turn run in one
+        compiled call (:func:`firefleet.sim._kernels._stretch.stretch_drive`), the same
+        numbers as tick by tick; None: every tick in full.
 
     Returns
     -------
@@ -545,8 +577,11 @@ def run_staged(
     link = stages.link.init(n, dt)
     rec = Recorder(rec_steps, n)
     estimation_series = getattr(stages.estimation, "series", None)
+    fast = quiet is not None and _stretch_ok(stages, drive, rng)
+    rec_next = 0  # index of the next tick to record in rec_steps
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
-        for k in range(int(k0), int(k1)):
+        k = int(k0)
+        while k < int(k1):
             t = k * dt
             world = stages.world.step(world, t)
             readings = stages.sensors.read(world, drive)
@@ -554,6 +589,7 @@ def run_staged(
             if k > 0:  # the encoders have counted since the last tick
                 estimate = stages.estimation.step(estimate, drive, stack, readings)
             inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
+            before = state
             state, command = decide(state, inputs, params, dt)
             if estimation_series is not None:  # the estimator's own quantities
                 command = dataclasses.replace(
@@ -576,6 +612,43 @@ def run_staged(
             drive = drive_step(
                 drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
             )
+            k += 1
+            if (
+                not fast
+                or quiet is None
+                or state is not before
+                or sent
+                or command.voltage_v is not None
+            ):
+                continue
+            # the quiet stretch: ticks where only the wheels turn (_stretch_ok's notes)
+            while rec_next < rec_steps.size and rec_steps[rec_next] < k:
+                rec_next += 1
+            limit = min(int(k1), n_steps) - k
+            if rec_next < rec_steps.size:
+                limit = min(limit, int(rec_steps[rec_next]) - k)
+            m = _quiet_ticks(stages, world, quiet, state, inputs, params, k, dt, limit)
+            if m <= 0:
+                continue
+            from firefleet.sim._kernels._stretch import stretch_drive
+
+            drive, odom_pose, odom_counts, poses = stretch_drive(
+                m,
+                drive,
+                stack,
+                command.reference_rad_s,
+                world.voltage_scale,
+                world.load_torque_n_m,
+                estimate.pose,
+                estimate.counts,
+            )
+            estimate = OdometryState(pose=odom_pose, counts=odom_counts)
+            k += m
+            last_t = (k - 1) * dt
+            world = stages.world.step(world, last_t)
+            stages.sensors.skip(world, poses)  # type: ignore[attr-defined]
+            if command.actions:
+                world = stages.world.act(world, command.actions, poses[-1])  # type: ignore[attr-defined]
         if progress is not None:
             progress(n_steps if command.done else min(int(k1), n_steps), n_steps)
         if command.done:
@@ -590,3 +663,44 @@ def run_staged(
         },
     )
     return dataclasses.replace(recording, estimation_state=estimate)
+
+
+def _stretch_ok(stages: Stages, drive: DriveState, rng: np.random.Generator | None) -> bool:
+    """Whether the stages allow quiet stretches: a world and sensors that tell their
+    quiet ticks (``quiet_ticks(world, k, dt_s, limit)``: from tick ``k`` on, the ticks
+    where the world's step only moves its time, and the sensors' reading draws nothing
+    and gives what it gave, with ``sensors.skip(world, poses)`` doing what their reads
+    would have done with the true poses (m, N, 3)), the ideal link, the odometry (its
+    class declaring ``arc_odometry``, no series), no slip and no odometry in the drive."""
+    return (
+        callable(getattr(stages.world, "quiet_ticks", None))
+        and callable(getattr(stages.sensors, "quiet_ticks", None))
+        and callable(getattr(stages.sensors, "skip", None))
+        and type(stages.link) is IdealLink
+        and bool(vars(type(stages.estimation)).get("arc_odometry", False))
+        and getattr(stages.estimation, "series", None) is None
+        and rng is None
+        and drive.odometry is None
+    )
+
+
+def _quiet_ticks(
+    stages: Stages,
+    world: WorldState,
+    quiet: QuietTicks,
+    state: Any,
+    inputs: DecideInputs,
+    params: Any,
+    k: int,
+    dt_s: float,
+    limit: int,
+) -> int:
+    """The quiet ticks from ``k`` on (at most ``limit``): quiet for every stage."""
+    if limit <= 0:
+        return 0
+    m = int(stages.world.quiet_ticks(world, k, dt_s, limit))  # type: ignore[attr-defined]
+    if m > 0:
+        m = min(m, int(stages.sensors.quiet_ticks(world, k, dt_s, m)))  # type: ignore[attr-defined]
+    if m > 0:
+        m = min(m, int(quiet(state, inputs, params, k, dt_s, m)))
+    return max(0, min(m, limit))

@@ -1,0 +1,265 @@
+"""The quiet stretch: the ticks of the staged loop where only the wheels turn, in one call.
+
+Between the events of a staged run (a world step, a sensor scan, a camera frame, a
+decision that changes), a tick of :func:`firefleet.sim.loop.run_staged` does the same
+few things every time: the odometry integrates the encoders' counts
+(:class:`~firefleet.sim.loop.Odometry`), the decision holds its command, the PIDs give
+the voltages (:func:`~firefleet.sim.drive.speed_control`), the world's voltage scale and
+load torque apply, and the wheel stack steps (:func:`~firefleet.sim.drive.drive_step`,
+without slip). :func:`drive_stretch` runs ``m`` such ticks of a team at once from the
+compiled scalar steps the other kernels use (:mod:`firefleet.sim._kernels`), and keeps
+each tick's true poses for the stages that look at them (a mission's contact test).
+tests/sim/test_loop_stretch.py shows a run with it equals the tick-by-tick loop bit for
+bit.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from firefleet._typing import FloatArray
+from firefleet.control.pid import PidState, pid_step_one
+from firefleet.models.encoder import EncoderState, encoder_step_one
+from firefleet.models.kinematics import diff_drive_step_one
+from firefleet.models.motor import motor_step_one
+from firefleet.sim.drive import DriveStack, DriveState
+
+__all__ = ["drive_stretch", "stretch_drive"]
+
+
+@numba.njit(cache=True)
+def drive_stretch(
+    m: int,
+    dt: float,
+    reference: FloatArray,
+    volt_scale: FloatArray,
+    load: FloatArray,
+    pose: FloatArray,
+    wheel: FloatArray,
+    history: FloatArray,
+    odom: FloatArray,
+    odom_counts: FloatArray,
+    motor: FloatArray,
+    pid: FloatArray,
+    true_geom: FloatArray,
+    nominal_geom: FloatArray,
+    encoder: FloatArray,
+    poses_out: FloatArray,
+) -> None:  # pragma: no cover - compiled
+    """``m`` quiet ticks of a team, in place (module notes).
+
+    Each tick, per robot: the odometry moved by the counts since its last update (the
+    count differences times ``nominal_geom[2]``, an arc with the nominal radius and
+    axle), the true pose kept in ``poses_out``, the PID on the held ``reference``, the
+    voltage times ``volt_scale``, the motors under ``load``, the encoders, the true
+    pose's arc (the turned angles times the true radius scale).
+
+    Parameters
+    ----------
+    m : int
+        Ticks to run.
+    dt : float
+        The tick [s].
+    reference : ndarray, shape (N, 2)
+        Wheel speed references held over the stretch [rad/s].
+    volt_scale : ndarray, shape (N,)
+        Fraction of the PIDs' voltage each robot's motors get (1.0: all of it).
+    load : ndarray, shape (N, 2)
+        Load torque on each motor [N m].
+    pose : ndarray, shape (N, 3)
+        True poses (in/out).
+    wheel : ndarray, shape (N, 2, 7)
+        Per wheel: current [A], speed [rad/s], angle [rad], measured speed [rad/s], PID
+        integral [V], filtered derivative [V], last measurement [rad/s] (in/out).
+    history : ndarray, shape (N, 2, window + 1)
+        Each encoder's last counts, oldest first (in/out).
+    odom : ndarray, shape (N, 3)
+        Dead-reckoned poses (in/out).
+    odom_counts : ndarray, shape (N, 2)
+        The counts ``odom`` integrates up to (in/out).
+    motor : ndarray, shape (12,)
+        :attr:`~firefleet.models.motor.DiscreteMotor.coefficients`.
+    pid : ndarray, shape (7,)
+        :attr:`~firefleet.control.pid.PidParams.gains`.
+    true_geom : ndarray, shape (4,)
+        True wheel radius over nominal, right and left; wheel radius [m]; true axle [m].
+    nominal_geom : ndarray, shape (3,)
+        Nominal wheel radius [m], nominal axle [m], wheel angle per count [rad].
+    encoder : ndarray, shape (2,)
+        Counts per radian and speed per count (as :func:`encoder_step_one` takes them).
+    poses_out : ndarray, shape (m, N, 3)
+        The true poses at the start of each tick (out).
+    """
+    coef = (
+        motor[0],
+        motor[1],
+        motor[2],
+        motor[3],
+        motor[4],
+        motor[5],
+        motor[6],
+        motor[7],
+        motor[8],
+        motor[9],
+        motor[10],
+        motor[11],
+    )
+    gains = (pid[0], pid[1], pid[2], pid[3], pid[4], pid[5], pid[6])
+    scale_r, scale_l, radius, axle = true_geom[0], true_geom[1], true_geom[2], true_geom[3]
+    n_radius, n_axle, per_count = nominal_geom[0], nominal_geom[1], nominal_geom[2]
+    per_rad, speed_per_count = encoder[0], encoder[1]
+    window = history.shape[2] - 1
+    for i in range(pose.shape[0]):
+        px, py, pth = pose[i, 0], pose[i, 1], pose[i, 2]
+        ox, oy, oth = odom[i, 0], odom[i, 1], odom[i, 2]
+        cur_r, spd_r, ang_r, meas_r = wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3]
+        int_r, der_r, last_r = wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6]
+        cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
+        int_l, der_l, last_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6]
+        ref_r, ref_l = reference[i, 0], reference[i, 1]
+        vs = volt_scale[i]
+        tau_r, tau_l = load[i, 0], load[i, 1]
+        for j in range(m):
+            # the estimation stage: the counts since the odometry's last update
+            c_r, c_l = history[i, 0, window], history[i, 1, window]
+            ox, oy, oth = diff_drive_step_one(
+                ox,
+                oy,
+                oth,
+                (c_r - odom_counts[i, 0]) * per_count,
+                (c_l - odom_counts[i, 1]) * per_count,
+                n_radius,
+                n_axle,
+            )
+            odom_counts[i, 0], odom_counts[i, 1] = c_r, c_l
+            poses_out[j, i, 0], poses_out[j, i, 1], poses_out[j, i, 2] = px, py, pth
+            # speed_control, the fault's scale, drive_step
+            int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref_r, meas_r, gains, dt)
+            last_r = meas_r
+            int_l, der_l, volt_l = pid_step_one(int_l, der_l, last_l, ref_l, meas_l, gains, dt)
+            last_l = meas_l
+            volt_r = volt_r * vs
+            volt_l = volt_l * vs
+            cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau_r, coef)
+            cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau_l, coef)
+            ang_r, count_r, meas_r = encoder_step_one(
+                ang_r, dphi_r, history[i, 0, 1], per_rad, speed_per_count
+            )
+            ang_l, count_l, meas_l = encoder_step_one(
+                ang_l, dphi_l, history[i, 1, 1], per_rad, speed_per_count
+            )
+            for h in range(window):
+                history[i, 0, h] = history[i, 0, h + 1]
+                history[i, 1, h] = history[i, 1, h + 1]
+            history[i, 0, window] = count_r
+            history[i, 1, window] = count_l
+            px, py, pth = diff_drive_step_one(
+                px, py, pth, dphi_r * scale_r, dphi_l * scale_l, radius, axle
+            )
+        pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
+        odom[i, 0], odom[i, 1], odom[i, 2] = ox, oy, oth
+        wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
+        wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6] = int_r, der_r, last_r
+        wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
+        wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6] = int_l, der_l, last_l
+
+
+def stretch_drive(
+    m: int,
+    drive: DriveState,
+    stack: DriveStack,
+    reference_rad_s: FloatArray,
+    voltage_scale: FloatArray | None,
+    load_torque_n_m: FloatArray,
+    odometry_pose: FloatArray,
+    odometry_counts: FloatArray,
+) -> tuple[DriveState, FloatArray, FloatArray, FloatArray]:
+    """``m`` quiet ticks (:func:`drive_stretch`) on the loop's arrays.
+
+    Parameters
+    ----------
+    m : int
+        Ticks (>= 1).
+    drive : DriveState
+        The team's wheel stacks before the first (``drive.odometry`` None).
+    stack : DriveStack
+    reference_rad_s : ndarray, shape (N, 2)
+        The held wheel speed references [rad/s].
+    voltage_scale : ndarray, shape (N,), or None
+        The world's voltage scale (None: all of the voltage).
+    load_torque_n_m : ndarray, shape (N, 2)
+    odometry_pose : ndarray, shape (N, 3)
+    odometry_counts : ndarray, shape (N, 2)
+        The odometry's pose and the counts it integrates up to.
+
+    Returns
+    -------
+    drive : DriveState
+        After the ``m`` ticks.
+    odometry_pose, odometry_counts : ndarray
+        The odometry after its update at each tick of the stretch (the counts: the
+        encoders' before the last drive step).
+    poses : ndarray, shape (m, N, 3)
+        The true poses at the start of each tick.
+    """
+    n = drive.pose.shape[0]
+    wheel = np.empty((n, 2, 7))
+    wheel[:, :, 0] = drive.current_a
+    wheel[:, :, 1] = drive.speed_rad_s
+    wheel[:, :, 2] = drive.encoder.angle_rad
+    wheel[:, :, 3] = drive.measured_rad_s
+    wheel[:, :, 4] = drive.pid.integral
+    wheel[:, :, 5] = drive.pid.derivative
+    wheel[:, :, 6] = drive.pid.last_measurement
+    history = np.ascontiguousarray(np.moveaxis(drive.encoder.history, 0, -1), dtype=np.float64)
+    pose = np.array(drive.pose, dtype=np.float64)
+    odom = np.array(odometry_pose, dtype=np.float64)
+    counts = np.array(odometry_counts, dtype=np.float64)
+    scale = stack.wheel_radius_scale or (1.0, 1.0)
+    enc = stack.encoder
+    poses = np.empty((m, n, 3))
+    drive_stretch(
+        m,
+        stack.dt_s,
+        np.ascontiguousarray(np.broadcast_to(reference_rad_s, (n, 2)), dtype=np.float64),
+        np.ones(n) if voltage_scale is None else np.asarray(voltage_scale, dtype=np.float64),
+        np.ascontiguousarray(np.broadcast_to(load_torque_n_m, (n, 2)), dtype=np.float64),
+        pose,
+        wheel,
+        history,
+        odom,
+        counts,
+        np.array(stack.motor.coefficients),
+        np.array(stack.pid.gains),
+        np.array(
+            [
+                scale[0],
+                scale[1],
+                stack.true_geometry.wheel_radius_m,
+                stack.true_geometry.axle_length_m,
+            ]
+        ),
+        np.array(
+            [stack.geometry.wheel_radius_m, stack.geometry.axle_length_m, stack.count_angle_rad]
+        ),
+        np.array([enc.counts_per_rad, enc.speed_per_count(stack.dt_s)]),
+        poses,
+    )
+    new = DriveState(
+        pose=pose,
+        current_a=wheel[:, :, 0].copy(),
+        speed_rad_s=wheel[:, :, 1].copy(),
+        measured_rad_s=wheel[:, :, 3].copy(),
+        pid=PidState(
+            integral=wheel[:, :, 4].copy(),
+            derivative=wheel[:, :, 5].copy(),
+            last_measurement=wheel[:, :, 6].copy(),
+        ),
+        encoder=EncoderState(
+            angle_rad=wheel[:, :, 2].copy(),
+            history=np.ascontiguousarray(np.moveaxis(history, -1, 0)),
+        ),
+        odometry=None,
+    )
+    return new, odom, counts, poses
