@@ -54,6 +54,12 @@ def test_stretch_equals_the_ticks_it_replaces(odometry: Odometry) -> None:
         for f in dataclasses.fields(a):
             np.testing.assert_array_equal(getattr(a, f.name), getattr(b, f.name))
     assert float(np.abs(poses[-1] - poses[0]).max()) > 1e-3  # the robots moved
+    one, volt_one = _stretch.drive_tick(drive, stack, reference, scale, load)
+    after, volt = speed_control(drive, reference, stack)
+    after = drive_step(after, volt * scale[:, None], stack, load_torque_n_m=load)
+    np.testing.assert_array_equal(volt_one, volt * scale[:, None])
+    for name in ("pose", "current_a", "speed_rad_s", "measured_rad_s"):
+        np.testing.assert_array_equal(getattr(one, name), getattr(after, name))
 
 
 def test_mission_with_stretches_equals_the_tick_by_tick_loop(

@@ -598,20 +598,34 @@ def run_staged(
             sent = command.outbox
             if command.actions:  # the world takes them at its next step
                 world = stages.world.act(world, command.actions, drive.pose)  # type: ignore[attr-defined]
-            if command.voltage_v is None:
+            stepped = None
+            if fast and command.voltage_v is None:  # the same tick in one compiled call
+                from firefleet.sim._kernels._stretch import drive_tick
+
+                stepped, voltage = drive_tick(
+                    drive,
+                    stack,
+                    command.reference_rad_s,
+                    world.voltage_scale,
+                    world.load_torque_n_m,
+                )
+            elif command.voltage_v is None:
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
             else:
                 voltage = command.voltage_v
-            if world.voltage_scale is not None:  # a motor fault
+            if world.voltage_scale is not None and stepped is None:  # a motor fault
                 voltage = voltage * world.voltage_scale[:, None]
             rec.record(
                 k, drive, command, voltage, world, stages.link.counters(link), force=command.done
             )
             if k == n_steps or command.done:
                 break
-            drive = drive_step(
-                drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
-            )
+            if stepped is not None:
+                drive = stepped
+            else:
+                drive = drive_step(
+                    drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
+                )
             k += 1
             if (
                 not fast

@@ -25,7 +25,7 @@ from firefleet.models.kinematics import diff_drive_step_one
 from firefleet.models.motor import motor_step_one
 from firefleet.sim.drive import DriveStack, DriveState
 
-__all__ = ["drive_stretch", "stretch_drive"]
+__all__ = ["drive_stretch", "drive_tick", "stretch_drive"]
 
 
 @numba.njit(cache=True)
@@ -46,6 +46,8 @@ def drive_stretch(
     nominal_geom: FloatArray,
     encoder: FloatArray,
     poses_out: FloatArray,
+    with_odometry: bool,
+    volt_out: FloatArray,
 ) -> None:  # pragma: no cover - compiled
     """``m`` quiet ticks of a team, in place (module notes).
 
@@ -90,6 +92,11 @@ def drive_stretch(
         Counts per radian and speed per count (as :func:`encoder_step_one` takes them).
     poses_out : ndarray, shape (m, N, 3)
         The true poses at the start of each tick (out).
+    with_odometry : bool
+        Whether each tick begins with the odometry's update (False: ``odom`` and
+        ``odom_counts`` are left alone).
+    volt_out : ndarray, shape (N, 2)
+        The voltages of the last tick (out).
     """
     coef = (
         motor[0],
@@ -121,18 +128,18 @@ def drive_stretch(
         vs = volt_scale[i]
         tau_r, tau_l = load[i, 0], load[i, 1]
         for j in range(m):
-            # the estimation stage: the counts since the odometry's last update
-            c_r, c_l = history[i, 0, window], history[i, 1, window]
-            ox, oy, oth = diff_drive_step_one(
-                ox,
-                oy,
-                oth,
-                (c_r - odom_counts[i, 0]) * per_count,
-                (c_l - odom_counts[i, 1]) * per_count,
-                n_radius,
-                n_axle,
-            )
-            odom_counts[i, 0], odom_counts[i, 1] = c_r, c_l
+            if with_odometry:  # the estimation stage: the counts since its last update
+                c_r, c_l = history[i, 0, window], history[i, 1, window]
+                ox, oy, oth = diff_drive_step_one(
+                    ox,
+                    oy,
+                    oth,
+                    (c_r - odom_counts[i, 0]) * per_count,
+                    (c_l - odom_counts[i, 1]) * per_count,
+                    n_radius,
+                    n_axle,
+                )
+                odom_counts[i, 0], odom_counts[i, 1] = c_r, c_l
             poses_out[j, i, 0], poses_out[j, i, 1], poses_out[j, i, 2] = px, py, pth
             # speed_control, the fault's scale, drive_step
             int_r, der_r, volt_r = pid_step_one(int_r, der_r, last_r, ref_r, meas_r, gains, dt)
@@ -141,6 +148,7 @@ def drive_stretch(
             last_l = meas_l
             volt_r = volt_r * vs
             volt_l = volt_l * vs
+            volt_out[i, 0], volt_out[i, 1] = volt_r, volt_l
             cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau_r, coef)
             cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau_l, coef)
             ang_r, count_r, meas_r = encoder_step_one(
@@ -158,11 +166,36 @@ def drive_stretch(
                 px, py, pth, dphi_r * scale_r, dphi_l * scale_l, radius, axle
             )
         pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
-        odom[i, 0], odom[i, 1], odom[i, 2] = ox, oy, oth
+        if with_odometry:
+            odom[i, 0], odom[i, 1], odom[i, 2] = ox, oy, oth
         wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
         wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6] = int_r, der_r, last_r
         wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
         wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6] = int_l, der_l, last_l
+
+
+def drive_tick(
+    drive: DriveState,
+    stack: DriveStack,
+    reference_rad_s: FloatArray,
+    voltage_scale: FloatArray | None,
+    load_torque_n_m: FloatArray,
+) -> tuple[DriveState, FloatArray]:
+    """One tick's :func:`~firefleet.sim.drive.speed_control`, the fault's voltage scale
+    and :func:`~firefleet.sim.drive.drive_step` (no slip, no odometry in the drive), in
+    one compiled call (:func:`drive_stretch` of one tick without the odometry).
+
+    Returns
+    -------
+    drive : DriveState
+        After the tick.
+    voltage_v : ndarray, shape (N, 2)
+        The voltages held over the tick (scaled) [V].
+    """
+    out, _, _, _, voltage = _run(
+        1, drive, stack, reference_rad_s, voltage_scale, load_torque_n_m, None, None
+    )
+    return out, voltage
 
 
 def stretch_drive(
@@ -203,6 +236,32 @@ def stretch_drive(
     poses : ndarray, shape (m, N, 3)
         The true poses at the start of each tick.
     """
+    out, odom, counts, poses, _ = _run(
+        m,
+        drive,
+        stack,
+        reference_rad_s,
+        voltage_scale,
+        load_torque_n_m,
+        odometry_pose,
+        odometry_counts,
+    )
+    assert odom is not None
+    assert counts is not None
+    return out, odom, counts, poses
+
+
+def _run(
+    m: int,
+    drive: DriveState,
+    stack: DriveStack,
+    reference_rad_s: FloatArray,
+    voltage_scale: FloatArray | None,
+    load_torque_n_m: FloatArray,
+    odometry_pose: FloatArray | None,
+    odometry_counts: FloatArray | None,
+) -> tuple[DriveState, FloatArray | None, FloatArray | None, FloatArray, FloatArray]:
+    """:func:`drive_stretch` on the loop's arrays (the odometry when given)."""
     n = drive.pose.shape[0]
     wheel = np.empty((n, 2, 7))
     wheel[:, :, 0] = drive.current_a
@@ -214,8 +273,10 @@ def stretch_drive(
     wheel[:, :, 6] = drive.pid.last_measurement
     history = np.ascontiguousarray(np.moveaxis(drive.encoder.history, 0, -1), dtype=np.float64)
     pose = np.array(drive.pose, dtype=np.float64)
-    odom = np.array(odometry_pose, dtype=np.float64)
-    counts = np.array(odometry_counts, dtype=np.float64)
+    with_odometry = odometry_pose is not None and odometry_counts is not None
+    odom = np.array(odometry_pose, dtype=np.float64) if with_odometry else np.zeros((n, 3))
+    counts = np.array(odometry_counts, dtype=np.float64) if with_odometry else np.zeros((n, 2))
+    voltage = np.empty((n, 2))
     scale = stack.wheel_radius_scale or (1.0, 1.0)
     enc = stack.encoder
     poses = np.empty((m, n, 3))
@@ -245,6 +306,8 @@ def stretch_drive(
         ),
         np.array([enc.counts_per_rad, enc.speed_per_count(stack.dt_s)]),
         poses,
+        with_odometry,
+        voltage,
     )
     new = DriveState(
         pose=pose,
@@ -262,4 +325,6 @@ def stretch_drive(
         ),
         odometry=None,
     )
-    return new, odom, counts, poses
+    if not with_odometry:
+        return new, None, None, poses, voltage
+    return new, odom, counts, poses, voltage
