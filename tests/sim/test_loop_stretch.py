@@ -74,9 +74,9 @@ def test_mission_with_stretches_equals_the_tick_by_tick_loop(
     ticks = []
     real = _stretch.stretch_drive
 
-    def counted(m: int, *args: object) -> object:
+    def counted(m: int, *args: object, **kwargs: object) -> object:
         ticks.append(m)
-        return real(m, *args)  # type: ignore[arg-type]
+        return real(m, *args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(_stretch, "stretch_drive", counted)
     fast = firefleet.simulate(scenario).arrays()

@@ -578,6 +578,10 @@ def run_staged(
     rec = Recorder(rec_steps, n)
     estimation_series = getattr(stages.estimation, "series", None)
     fast = quiet is not None and _stretch_ok(stages, drive, rng)
+    if fast:
+        from firefleet.sim._kernels import _stretch
+
+        consts = _stretch.stretch_constants(stack, n)
     rec_next = 0  # index of the next tick to record in rec_steps
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         k = int(k0)
@@ -600,14 +604,13 @@ def run_staged(
                 world = stages.world.act(world, command.actions, drive.pose)  # type: ignore[attr-defined]
             stepped = None
             if fast and command.voltage_v is None:  # the same tick in one compiled call
-                from firefleet.sim._kernels._stretch import drive_tick
-
-                stepped, voltage = drive_tick(
+                stepped, voltage = _stretch.drive_tick(
                     drive,
                     stack,
                     command.reference_rad_s,
                     world.voltage_scale,
                     world.load_torque_n_m,
+                    consts,
                 )
             elif command.voltage_v is None:
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
@@ -644,9 +647,7 @@ def run_staged(
             m = _quiet_ticks(stages, world, quiet, state, inputs, params, k, dt, limit)
             if m <= 0:
                 continue
-            from firefleet.sim._kernels._stretch import stretch_drive
-
-            drive, odom_pose, odom_counts, poses = stretch_drive(
+            drive, odom_pose, odom_counts, poses = _stretch.stretch_drive(
                 m,
                 drive,
                 stack,
@@ -655,6 +656,7 @@ def run_staged(
                 world.load_torque_n_m,
                 estimate.pose,
                 estimate.counts,
+                consts,
             )
             estimate = OdometryState(pose=odom_pose, counts=odom_counts)
             k += m

@@ -15,6 +15,8 @@ bit.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numba
 import numpy as np
 
@@ -25,7 +27,47 @@ from firefleet.models.kinematics import diff_drive_step_one
 from firefleet.models.motor import motor_step_one
 from firefleet.sim.drive import DriveStack, DriveState
 
-__all__ = ["drive_stretch", "drive_tick", "stretch_drive"]
+__all__ = ["StretchConstants", "drive_stretch", "drive_tick", "stretch_constants", "stretch_drive"]
+
+
+@dataclass(frozen=True, eq=False)
+class StretchConstants:
+    """The wheel stack's numbers as :func:`drive_stretch` takes them, for a team of N."""
+
+    motor: FloatArray
+    pid: FloatArray
+    true_geom: FloatArray
+    nominal_geom: FloatArray
+    encoder: FloatArray
+    ones: FloatArray
+    no_odom: FloatArray
+    no_counts: FloatArray
+
+
+def stretch_constants(stack: DriveStack, n_robots: int | None = None) -> StretchConstants:
+    """:class:`StretchConstants` of ``stack`` (``n_robots``: the team's size; None: 1)."""
+    scale = stack.wheel_radius_scale or (1.0, 1.0)
+    enc = stack.encoder
+    n = 1 if n_robots is None else n_robots
+    return StretchConstants(
+        motor=np.array(stack.motor.coefficients, dtype=np.float64),
+        pid=np.array(stack.pid.gains, dtype=np.float64),
+        true_geom=np.array(
+            [
+                scale[0],
+                scale[1],
+                stack.true_geometry.wheel_radius_m,
+                stack.true_geometry.axle_length_m,
+            ]
+        ),
+        nominal_geom=np.array(
+            [stack.geometry.wheel_radius_m, stack.geometry.axle_length_m, stack.count_angle_rad]
+        ),
+        encoder=np.array([enc.counts_per_rad, enc.speed_per_count(stack.dt_s)]),
+        ones=np.ones(n),
+        no_odom=np.zeros((n, 3)),
+        no_counts=np.zeros((n, 2)),
+    )
 
 
 @numba.njit(cache=True)
@@ -71,11 +113,11 @@ def drive_stretch(
         Load torque on each motor [N m].
     pose : ndarray, shape (N, 3)
         True poses (in/out).
-    wheel : ndarray, shape (N, 2, 7)
+    wheel : ndarray, shape (7, N, 2)
         Per wheel: current [A], speed [rad/s], angle [rad], measured speed [rad/s], PID
         integral [V], filtered derivative [V], last measurement [rad/s] (in/out).
-    history : ndarray, shape (N, 2, window + 1)
-        Each encoder's last counts, oldest first (in/out).
+    history : ndarray, shape (window + 1, N, 2)
+        Each encoder's last counts, oldest first (in/out; EncoderState's layout).
     odom : ndarray, shape (N, 3)
         Dead-reckoned poses (in/out).
     odom_counts : ndarray, shape (N, 2)
@@ -116,20 +158,20 @@ def drive_stretch(
     scale_r, scale_l, radius, axle = true_geom[0], true_geom[1], true_geom[2], true_geom[3]
     n_radius, n_axle, per_count = nominal_geom[0], nominal_geom[1], nominal_geom[2]
     per_rad, speed_per_count = encoder[0], encoder[1]
-    window = history.shape[2] - 1
+    window = history.shape[0] - 1
     for i in range(pose.shape[0]):
         px, py, pth = pose[i, 0], pose[i, 1], pose[i, 2]
         ox, oy, oth = odom[i, 0], odom[i, 1], odom[i, 2]
-        cur_r, spd_r, ang_r, meas_r = wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3]
-        int_r, der_r, last_r = wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6]
-        cur_l, spd_l, ang_l, meas_l = wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3]
-        int_l, der_l, last_l = wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6]
+        cur_r, spd_r, ang_r, meas_r = wheel[0, i, 0], wheel[1, i, 0], wheel[2, i, 0], wheel[3, i, 0]
+        int_r, der_r, last_r = wheel[4, i, 0], wheel[5, i, 0], wheel[6, i, 0]
+        cur_l, spd_l, ang_l, meas_l = wheel[0, i, 1], wheel[1, i, 1], wheel[2, i, 1], wheel[3, i, 1]
+        int_l, der_l, last_l = wheel[4, i, 1], wheel[5, i, 1], wheel[6, i, 1]
         ref_r, ref_l = reference[i, 0], reference[i, 1]
         vs = volt_scale[i]
         tau_r, tau_l = load[i, 0], load[i, 1]
         for j in range(m):
             if with_odometry:  # the estimation stage: the counts since its last update
-                c_r, c_l = history[i, 0, window], history[i, 1, window]
+                c_r, c_l = history[window, i, 0], history[window, i, 1]
                 ox, oy, oth = diff_drive_step_one(
                     ox,
                     oy,
@@ -152,26 +194,26 @@ def drive_stretch(
             cur_r, spd_r, dphi_r = motor_step_one(cur_r, spd_r, volt_r, tau_r, coef)
             cur_l, spd_l, dphi_l = motor_step_one(cur_l, spd_l, volt_l, tau_l, coef)
             ang_r, count_r, meas_r = encoder_step_one(
-                ang_r, dphi_r, history[i, 0, 1], per_rad, speed_per_count
+                ang_r, dphi_r, history[1, i, 0], per_rad, speed_per_count
             )
             ang_l, count_l, meas_l = encoder_step_one(
-                ang_l, dphi_l, history[i, 1, 1], per_rad, speed_per_count
+                ang_l, dphi_l, history[1, i, 1], per_rad, speed_per_count
             )
             for h in range(window):
-                history[i, 0, h] = history[i, 0, h + 1]
-                history[i, 1, h] = history[i, 1, h + 1]
-            history[i, 0, window] = count_r
-            history[i, 1, window] = count_l
+                history[h, i, 0] = history[h + 1, i, 0]
+                history[h, i, 1] = history[h + 1, i, 1]
+            history[window, i, 0] = count_r
+            history[window, i, 1] = count_l
             px, py, pth = diff_drive_step_one(
                 px, py, pth, dphi_r * scale_r, dphi_l * scale_l, radius, axle
             )
         pose[i, 0], pose[i, 1], pose[i, 2] = px, py, pth
         if with_odometry:
             odom[i, 0], odom[i, 1], odom[i, 2] = ox, oy, oth
-        wheel[i, 0, 0], wheel[i, 0, 1], wheel[i, 0, 2], wheel[i, 0, 3] = cur_r, spd_r, ang_r, meas_r
-        wheel[i, 0, 4], wheel[i, 0, 5], wheel[i, 0, 6] = int_r, der_r, last_r
-        wheel[i, 1, 0], wheel[i, 1, 1], wheel[i, 1, 2], wheel[i, 1, 3] = cur_l, spd_l, ang_l, meas_l
-        wheel[i, 1, 4], wheel[i, 1, 5], wheel[i, 1, 6] = int_l, der_l, last_l
+        wheel[0, i, 0], wheel[1, i, 0], wheel[2, i, 0], wheel[3, i, 0] = cur_r, spd_r, ang_r, meas_r
+        wheel[4, i, 0], wheel[5, i, 0], wheel[6, i, 0] = int_r, der_r, last_r
+        wheel[0, i, 1], wheel[1, i, 1], wheel[2, i, 1], wheel[3, i, 1] = cur_l, spd_l, ang_l, meas_l
+        wheel[4, i, 1], wheel[5, i, 1], wheel[6, i, 1] = int_l, der_l, last_l
 
 
 def drive_tick(
@@ -180,10 +222,12 @@ def drive_tick(
     reference_rad_s: FloatArray,
     voltage_scale: FloatArray | None,
     load_torque_n_m: FloatArray,
+    consts: StretchConstants | None = None,
 ) -> tuple[DriveState, FloatArray]:
     """One tick's :func:`~firefleet.sim.drive.speed_control`, the fault's voltage scale
     and :func:`~firefleet.sim.drive.drive_step` (no slip, no odometry in the drive), in
-    one compiled call (:func:`drive_stretch` of one tick without the odometry).
+    one compiled call (:func:`drive_stretch` of one tick without the odometry);
+    ``consts``: :func:`stretch_constants` (made once per run), None: made here.
 
     Returns
     -------
@@ -193,7 +237,7 @@ def drive_tick(
         The voltages held over the tick (scaled) [V].
     """
     out, _, _, _, voltage = _run(
-        1, drive, stack, reference_rad_s, voltage_scale, load_torque_n_m, None, None
+        1, drive, stack, reference_rad_s, voltage_scale, load_torque_n_m, None, None, consts
     )
     return out, voltage
 
@@ -207,6 +251,7 @@ def stretch_drive(
     load_torque_n_m: FloatArray,
     odometry_pose: FloatArray,
     odometry_counts: FloatArray,
+    consts: StretchConstants | None = None,
 ) -> tuple[DriveState, FloatArray, FloatArray, FloatArray]:
     """``m`` quiet ticks (:func:`drive_stretch`) on the loop's arrays.
 
@@ -225,6 +270,8 @@ def stretch_drive(
     odometry_pose : ndarray, shape (N, 3)
     odometry_counts : ndarray, shape (N, 2)
         The odometry's pose and the counts it integrates up to.
+    consts : StretchConstants, optional
+        :func:`stretch_constants` of ``stack`` and the team (made once per run).
 
     Returns
     -------
@@ -245,6 +292,7 @@ def stretch_drive(
         load_torque_n_m,
         odometry_pose,
         odometry_counts,
+        consts,
     )
     assert odom is not None
     assert counts is not None
@@ -260,69 +308,63 @@ def _run(
     load_torque_n_m: FloatArray,
     odometry_pose: FloatArray | None,
     odometry_counts: FloatArray | None,
+    consts: StretchConstants | None,
 ) -> tuple[DriveState, FloatArray | None, FloatArray | None, FloatArray, FloatArray]:
     """:func:`drive_stretch` on the loop's arrays (the odometry when given)."""
     n = drive.pose.shape[0]
-    wheel = np.empty((n, 2, 7))
-    wheel[:, :, 0] = drive.current_a
-    wheel[:, :, 1] = drive.speed_rad_s
-    wheel[:, :, 2] = drive.encoder.angle_rad
-    wheel[:, :, 3] = drive.measured_rad_s
-    wheel[:, :, 4] = drive.pid.integral
-    wheel[:, :, 5] = drive.pid.derivative
-    wheel[:, :, 6] = drive.pid.last_measurement
-    history = np.ascontiguousarray(np.moveaxis(drive.encoder.history, 0, -1), dtype=np.float64)
+    c = stretch_constants(stack, n) if consts is None else consts
+    wheel = np.array(
+        [
+            drive.current_a,
+            drive.speed_rad_s,
+            drive.encoder.angle_rad,
+            drive.measured_rad_s,
+            drive.pid.integral,
+            drive.pid.derivative,
+            drive.pid.last_measurement,
+        ],
+        dtype=np.float64,
+    )
+    history = np.array(drive.encoder.history, dtype=np.float64)
     pose = np.array(drive.pose, dtype=np.float64)
     with_odometry = odometry_pose is not None and odometry_counts is not None
-    odom = np.array(odometry_pose, dtype=np.float64) if with_odometry else np.zeros((n, 3))
-    counts = np.array(odometry_counts, dtype=np.float64) if with_odometry else np.zeros((n, 2))
+    odom = np.array(odometry_pose, dtype=np.float64) if with_odometry else c.no_odom
+    counts = np.array(odometry_counts, dtype=np.float64) if with_odometry else c.no_counts
     voltage = np.empty((n, 2))
-    scale = stack.wheel_radius_scale or (1.0, 1.0)
-    enc = stack.encoder
     poses = np.empty((m, n, 3))
+    reference = np.asarray(reference_rad_s, dtype=np.float64)
+    if reference.shape != (n, 2) or not reference.flags.c_contiguous:
+        reference = np.ascontiguousarray(np.broadcast_to(reference, (n, 2)))
+    load = np.asarray(load_torque_n_m, dtype=np.float64)
+    if load.shape != (n, 2) or not load.flags.c_contiguous:
+        load = np.ascontiguousarray(np.broadcast_to(load, (n, 2)))
     drive_stretch(
         m,
         stack.dt_s,
-        np.ascontiguousarray(np.broadcast_to(reference_rad_s, (n, 2)), dtype=np.float64),
-        np.ones(n) if voltage_scale is None else np.asarray(voltage_scale, dtype=np.float64),
-        np.ascontiguousarray(np.broadcast_to(load_torque_n_m, (n, 2)), dtype=np.float64),
+        reference,
+        c.ones if voltage_scale is None else np.asarray(voltage_scale, dtype=np.float64),
+        load,
         pose,
         wheel,
         history,
         odom,
         counts,
-        np.array(stack.motor.coefficients),
-        np.array(stack.pid.gains),
-        np.array(
-            [
-                scale[0],
-                scale[1],
-                stack.true_geometry.wheel_radius_m,
-                stack.true_geometry.axle_length_m,
-            ]
-        ),
-        np.array(
-            [stack.geometry.wheel_radius_m, stack.geometry.axle_length_m, stack.count_angle_rad]
-        ),
-        np.array([enc.counts_per_rad, enc.speed_per_count(stack.dt_s)]),
+        c.motor,
+        c.pid,
+        c.true_geom,
+        c.nominal_geom,
+        c.encoder,
         poses,
         with_odometry,
         voltage,
     )
     new = DriveState(
         pose=pose,
-        current_a=wheel[:, :, 0].copy(),
-        speed_rad_s=wheel[:, :, 1].copy(),
-        measured_rad_s=wheel[:, :, 3].copy(),
-        pid=PidState(
-            integral=wheel[:, :, 4].copy(),
-            derivative=wheel[:, :, 5].copy(),
-            last_measurement=wheel[:, :, 6].copy(),
-        ),
-        encoder=EncoderState(
-            angle_rad=wheel[:, :, 2].copy(),
-            history=np.ascontiguousarray(np.moveaxis(history, -1, 0)),
-        ),
+        current_a=wheel[0],
+        speed_rad_s=wheel[1],
+        measured_rad_s=wheel[3],
+        pid=PidState(integral=wheel[4], derivative=wheel[5], last_measurement=wheel[6]),
+        encoder=EncoderState(angle_rad=wheel[2], history=history),
         odometry=None,
     )
     if not with_odometry:
