@@ -1,5 +1,5 @@
-"""The staged loop's quiet stretches (sim/loop.py, sim/_kernels/_stretch.py): the same
-numbers as the tick-by-tick loop, bit for bit."""
+"""The staged loop's quiet stretches (sim/loop.py, sim/_quiet_stretch.py,
+sim/_kernels/_stretch.py): the same numbers as the tick-by-tick loop, bit for bit."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import firefleet
-import firefleet.sim.loop as loop
 from firefleet.control.pid import PidParams
 from firefleet.models import EncoderParams, MotorParams, RobotGeometry
+from firefleet.sim import _quiet_stretch as qs
 from firefleet.sim._kernels import _stretch
 from firefleet.sim.drive import discretise_drive, drive_init, drive_step, speed_control
 from firefleet.sim.kinds._mission_odometry import MissionOdometry
@@ -72,15 +72,15 @@ def test_mission_with_stretches_equals_the_tick_by_tick_loop(
         firefleet.load_scenario("examples/missions/mission-office.yaml"), duration_s=12.0
     )
     ticks = []
-    real = _stretch.stretch_drive
+    real = qs.stretch_drive
 
     def counted(m: int, *args: object, **kwargs: object) -> object:
         ticks.append(m)
         return real(m, *args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(_stretch, "stretch_drive", counted)
+    monkeypatch.setattr(qs, "stretch_drive", counted)
     fast = firefleet.simulate(scenario).arrays()
-    monkeypatch.setattr(loop, "_stretch_ok", lambda *a: False)
+    monkeypatch.setattr(qs, "stretch_ok", lambda *a: False)
     slow = firefleet.simulate(scenario).arrays()
     assert sum(ticks) > 0.4 * scenario.n_steps, sum(ticks)
     assert fast.keys() == slow.keys()

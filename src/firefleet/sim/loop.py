@@ -26,6 +26,12 @@ stages (static world, no sensors, ideal link, odometry). :func:`run_loop` takes 
 whenever the stages are the defaults; the staged path, each stage a function on arrays
 and the ticks in chunks of Python, is the reference (tests/sim/test_loop.py shows the
 two agree).
+
+A kind with stages of its own runs the staged path, where most ticks between its events
+(a world step, a scan, a frame, a decision that changes) only turn the wheels. If its
+decider and stages say which (:data:`QuietTicks`, :mod:`firefleet.sim._quiet_stretch`),
+each such *quiet stretch* runs in one compiled call, and every tick's wheel step in
+another: the same numbers bit for bit (tests/sim/test_loop_stretch.py).
 """
 
 from __future__ import annotations
@@ -183,7 +189,8 @@ class Odometry:
     """Pose estimate by dead reckoning: the encoders' count differences, nominal geometry.
 
     ``arc_odometry``: its step is the arc of the count differences that the quiet
-    stretch computes (:func:`_stretch_ok`); a subclass declares it itself.
+    stretches compute (:func:`firefleet.sim._quiet_stretch.stretch_ok`); a subclass
+    declares it itself.
     """
 
     arc_odometry: ClassVar[bool] = True
@@ -319,7 +326,7 @@ QuietTicks = Callable[[Any, DecideInputs, Any, int, float, int], int]
 ``inputs``) whose decision returned its state object unchanged (nothing new), how many
 of the ticks ``k, k + 1, ...`` (at most ``limit``) it would answer the same way, the same
 state and the same command, with the same readings, inbox and no new pose but the time
-(the stages see to that: :func:`_stretch_ok`)."""
+(the stages see to that: `sim._quiet_stretch.stretch_ok`)."""
 
 
 @dataclass(frozen=True)
@@ -545,9 +552,9 @@ def run_staged(
         Draws the wheels' slip in each drive step (:func:`drive_step`); None: no slip.
     quiet : callable, optional
         The decision's quiet ticks (:data:`QuietTicks`): with it, and stages that know
-        theirs (:func:`_stretch_ok`), the ticks where only the wheels turn run in one
-        compiled call (:func:`firefleet.sim._kernels._stretch.stretch_drive`), the same
-        numbers as tick by tick; None: every tick in full.
+        theirs (:mod:`firefleet.sim._quiet_stretch`), the ticks where only the wheels turn
+        run in one compiled call, the same numbers as tick by tick; None: every tick in
+        full.
 
     Returns
     -------
@@ -577,11 +584,10 @@ def run_staged(
     link = stages.link.init(n, dt)
     rec = Recorder(rec_steps, n)
     estimation_series = getattr(stages.estimation, "series", None)
-    fast = quiet is not None and _stretch_ok(stages, drive, rng)
-    if fast:
-        from firefleet.sim._kernels import _stretch
+    from firefleet.sim import _quiet_stretch as qs  # it imports this module's types
 
-        consts = _stretch.stretch_constants(stack, n)
+    fast = quiet is not None and qs.stretch_ok(stages, drive, rng)
+    consts = qs.stretch_constants(stack, n) if fast else None
     rec_next = 0  # index of the next tick to record in rec_steps
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         k = int(k0)
@@ -604,7 +610,7 @@ def run_staged(
                 world = stages.world.act(world, command.actions, drive.pose)  # type: ignore[attr-defined]
             stepped = None
             if fast and command.voltage_v is None:  # the same tick in one compiled call
-                stepped, voltage = _stretch.drive_tick(
+                stepped, voltage = qs.drive_tick(
                     drive,
                     stack,
                     command.reference_rad_s,
@@ -630,41 +636,19 @@ def run_staged(
                     drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
                 )
             k += 1
-            if (
-                not fast
-                or quiet is None
-                or state is not before
-                or sent
-                or command.voltage_v is not None
-            ):
-                continue
-            # the quiet stretch: ticks where only the wheels turn (_stretch_ok's notes)
-            while rec_next < rec_steps.size and rec_steps[rec_next] < k:
-                rec_next += 1
-            limit = min(int(k1), n_steps) - k
-            if rec_next < rec_steps.size:
-                limit = min(limit, int(rec_steps[rec_next]) - k)
-            m = _quiet_ticks(stages, world, quiet, state, inputs, params, k, dt, limit)
-            if m <= 0:
-                continue
-            drive, odom_pose, odom_counts, poses = _stretch.stretch_drive(
-                m,
-                drive,
-                stack,
-                command.reference_rad_s,
-                world.voltage_scale,
-                world.load_torque_n_m,
-                estimate.pose,
-                estimate.counts,
-                consts,
-            )
-            estimate = OdometryState(pose=odom_pose, counts=odom_counts)
-            k += m
-            last_t = (k - 1) * dt
-            world = stages.world.step(world, last_t)
-            stages.sensors.skip(world, poses)  # type: ignore[attr-defined]
-            if command.actions:
-                world = stages.world.act(world, command.actions, poses[-1])  # type: ignore[attr-defined]
+            if fast and state is before and not sent and command.voltage_v is None:
+                # the quiet stretch: ticks where only the wheels turn (module notes)
+                while rec_next < rec_steps.size and rec_steps[rec_next] < k:
+                    rec_next += 1
+                limit = min(int(k1), n_steps) - k
+                if rec_next < rec_steps.size:
+                    limit = min(limit, int(rec_steps[rec_next]) - k)
+                m = qs.quiet_ticks(stages, world, quiet, state, inputs, params, k, dt, limit)
+                if m > 0:
+                    drive, estimate, world = qs.run_stretch(
+                        m, k, drive, stack, stages, world, command, estimate, consts
+                    )
+                    k += m
         if progress is not None:
             progress(n_steps if command.done else min(int(k1), n_steps), n_steps)
         if command.done:
@@ -679,44 +663,3 @@ def run_staged(
         },
     )
     return dataclasses.replace(recording, estimation_state=estimate)
-
-
-def _stretch_ok(stages: Stages, drive: DriveState, rng: np.random.Generator | None) -> bool:
-    """Whether the stages allow quiet stretches: a world and sensors that tell their
-    quiet ticks (``quiet_ticks(world, k, dt_s, limit)``: from tick ``k`` on, the ticks
-    where the world's step only moves its time, and the sensors' reading draws nothing
-    and gives what it gave, with ``sensors.skip(world, poses)`` doing what their reads
-    would have done with the true poses (m, N, 3)), the ideal link, the odometry (its
-    class declaring ``arc_odometry``, no series), no slip and no odometry in the drive."""
-    return (
-        callable(getattr(stages.world, "quiet_ticks", None))
-        and callable(getattr(stages.sensors, "quiet_ticks", None))
-        and callable(getattr(stages.sensors, "skip", None))
-        and type(stages.link) is IdealLink
-        and bool(vars(type(stages.estimation)).get("arc_odometry", False))
-        and getattr(stages.estimation, "series", None) is None
-        and rng is None
-        and drive.odometry is None
-    )
-
-
-def _quiet_ticks(
-    stages: Stages,
-    world: WorldState,
-    quiet: QuietTicks,
-    state: Any,
-    inputs: DecideInputs,
-    params: Any,
-    k: int,
-    dt_s: float,
-    limit: int,
-) -> int:
-    """The quiet ticks from ``k`` on (at most ``limit``): quiet for every stage."""
-    if limit <= 0:
-        return 0
-    m = int(stages.world.quiet_ticks(world, k, dt_s, limit))  # type: ignore[attr-defined]
-    if m > 0:
-        m = min(m, int(stages.sensors.quiet_ticks(world, k, dt_s, m)))  # type: ignore[attr-defined]
-    if m > 0:
-        m = min(m, int(quiet(state, inputs, params, k, dt_s, m)))
-    return max(0, min(m, limit))
