@@ -27,7 +27,14 @@ from firefleet.models.kinematics import diff_drive_step_one
 from firefleet.models.motor import motor_step_one
 from firefleet.sim.drive import DriveStack, DriveState
 
-__all__ = ["StretchConstants", "drive_stretch", "drive_tick", "stretch_constants", "stretch_drive"]
+__all__ = [
+    "StretchConstants",
+    "drive_stretch",
+    "drive_tick",
+    "odometry_arc",
+    "stretch_constants",
+    "stretch_drive",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +75,28 @@ def stretch_constants(stack: DriveStack, n_robots: int | None = None) -> Stretch
         no_odom=np.zeros((n, 3)),
         no_counts=np.zeros((n, 2)),
     )
+
+
+@numba.njit(cache=True)
+def odometry_arc(
+    pose: FloatArray, counts_before: FloatArray, counts: FloatArray, nominal_geom: FloatArray
+) -> FloatArray:  # pragma: no cover - compiled
+    """The odometry's poses (N, 3) moved by the count differences (N, 2): the step of
+    :class:`~firefleet.sim.loop.Odometry` (``nominal_geom`` as :func:`drive_stretch`
+    takes it), the same arithmetic as each tick of :func:`drive_stretch`."""
+    out = np.empty_like(pose)
+    n_radius, n_axle, per_count = nominal_geom[0], nominal_geom[1], nominal_geom[2]
+    for i in range(pose.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = diff_drive_step_one(
+            pose[i, 0],
+            pose[i, 1],
+            pose[i, 2],
+            (counts[i, 0] - counts_before[i, 0]) * per_count,
+            (counts[i, 1] - counts_before[i, 1]) * per_count,
+            n_radius,
+            n_axle,
+        )
+    return out
 
 
 @numba.njit(cache=True)
