@@ -79,7 +79,7 @@ def _timed(spent: dict[str, float]) -> Iterator[None]:
     import firefleet.control.mission._step as cstep
     import firefleet.sim.loop as loop
     import firefleet.sim.sensors as sensors
-    from firefleet.sim._kernels import _stretch as stretch
+    from firefleet.sim import _quiet_stretch as stretch
     from firefleet.sim.kinds import _mission_world as mw
     from firefleet.sim.ranging import RangeSensors
 
@@ -102,8 +102,19 @@ def _timed(spent: dict[str, float]) -> Iterator[None]:
         (cm, "tactics_step", cm.tactics_step),
         (loop, "drive_step", vars(loop)["drive_step"]),
         (stretch, "stretch_drive", stretch.stretch_drive),  # the loop's quiet stretches
+        (stretch, "drive_tick", stretch.drive_tick),  # and its other ticks' wheel steps
     ]
-    names = ("world", "ranging", "render", "detect", "navigation", "tactics_all", "drive", "drive")
+    names = (
+        "world",
+        "ranging",
+        "render",
+        "detect",
+        "navigation",
+        "tactics_all",
+        "drive",
+        "drive",
+        "drive",
+    )
     try:
         for (owner, attr, fn), name in zip(patches, names, strict=True):
             setattr(owner, attr, wrap(name, fn))
