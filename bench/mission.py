@@ -68,7 +68,7 @@ PARTS = (
     ("detect", "thermal detection"),
     ("navigation", "navigation (A*, DWA) inside the tactics"),
     ("tactics", "tactics without navigation (planning)"),
-    ("drive", "wheel stack (control)"),
+    ("drive", "wheel stack (control; in quiet stretches with the odometry)"),
 )
 
 
@@ -79,6 +79,7 @@ def _timed(spent: dict[str, float]) -> Iterator[None]:
     import firefleet.control.mission._step as cstep
     import firefleet.sim.loop as loop
     import firefleet.sim.sensors as sensors
+    from firefleet.sim import _quiet_stretch as stretch
     from firefleet.sim.kinds import _mission_world as mw
     from firefleet.sim.ranging import RangeSensors
 
@@ -100,8 +101,20 @@ def _timed(spent: dict[str, float]) -> Iterator[None]:
         (cstep, "navigation_step", vars(cstep)["navigation_step"]),
         (cm, "tactics_step", cm.tactics_step),
         (loop, "drive_step", vars(loop)["drive_step"]),
+        (stretch, "stretch_drive", stretch.stretch_drive),  # the loop's quiet stretches
+        (stretch, "drive_tick", stretch.drive_tick),  # and its other ticks' wheel steps
     ]
-    names = ("world", "ranging", "render", "detect", "navigation", "tactics_all", "drive")
+    names = (
+        "world",
+        "ranging",
+        "render",
+        "detect",
+        "navigation",
+        "tactics_all",
+        "drive",
+        "drive",
+        "drive",
+    )
     try:
         for (owner, attr, fn), name in zip(patches, names, strict=True):
             setattr(owner, attr, wrap(name, fn))

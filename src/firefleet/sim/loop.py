@@ -26,6 +26,12 @@ stages (static world, no sensors, ideal link, odometry). :func:`run_loop` takes 
 whenever the stages are the defaults; the staged path, each stage a function on arrays
 and the ticks in chunks of Python, is the reference (tests/sim/test_loop.py shows the
 two agree).
+
+A kind with stages of its own runs the staged path, where most ticks between its events
+(a world step, a scan, a frame, a decision that changes) only turn the wheels. If its
+decider and stages say which (:data:`QuietTicks`, :mod:`firefleet.sim._quiet_stretch`),
+each such *quiet stretch* runs in one compiled call, and every tick's wheel step in
+another: the same numbers bit for bit (tests/sim/test_loop_stretch.py).
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ import dataclasses
 import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -180,7 +186,14 @@ class OdometryState:
 
 @dataclass(frozen=True)
 class Odometry:
-    """Pose estimate by dead reckoning: the encoders' count differences, nominal geometry."""
+    """Pose estimate by dead reckoning: the encoders' count differences, nominal geometry.
+
+    ``arc_odometry``: its step is the arc of the count differences that the quiet
+    stretches compute (:func:`firefleet.sim._quiet_stretch.stretch_ok`); a subclass
+    declares it itself.
+    """
+
+    arc_odometry: ClassVar[bool] = True
 
     def init(self, pose: FloatArray, drive: DriveState) -> OdometryState:
         """The estimate at the start: the true start poses."""
@@ -308,6 +321,13 @@ class WheelCommand:
 DecideStep = Callable[[Any, DecideInputs, Any, float], tuple[Any, WheelCommand]]
 """``new_state, command = decide(state, inputs, params, dt_s)``."""
 
+QuietTicks = Callable[[Any, DecideInputs, Any, int, float, int], int]
+"""``m = quiet_ticks(state, inputs, params, k, dt_s, limit)``: after a tick (its
+``inputs``) whose decision returned its state object unchanged (nothing new), how many
+of the ticks ``k, k + 1, ...`` (at most ``limit``) it would answer the same way, the same
+state and the same command, with the same readings, inbox and no new pose but the time
+(the stages see to that: `sim._quiet_stretch.stretch_ok`)."""
+
 
 @dataclass(frozen=True)
 class Decider:
@@ -326,12 +346,16 @@ class Decider:
     uses_estimate : bool
         Whether ``decide`` reads ``pose_estimate`` (the default stages then include
         odometry).
+    quiet_ticks : callable, optional
+        The decision's quiet ticks (:data:`QuietTicks`) for the staged loop's quiet
+        stretches; None: none.
     """
 
     init: Callable[[Scenario], tuple[Any, Any]]
     decide: DecideStep
     series: tuple[str, ...] = ()
     uses_estimate: bool = False
+    quiet_ticks: QuietTicks | None = None
 
 
 FusedRun = Callable[[Scenario, FloatArray, NDArray[np.int64], "ProgressCallback | None"], SimResult]
@@ -462,7 +486,16 @@ def run_loop(
     drive = drive_init(scenario.initial_poses, phase, stack)
     state, params = decider.init(scenario)
     rec = run_staged(
-        drive, stack, stg, decider.decide, state, params, rec_steps, n_steps, progress=progress
+        drive,
+        stack,
+        stg,
+        decider.decide,
+        state,
+        params,
+        rec_steps,
+        n_steps,
+        progress=progress,
+        quiet=decider.quiet_ticks,
     )
     return SimResult(
         scenario=scenario,
@@ -494,6 +527,7 @@ def run_staged(
     *,
     progress: ProgressCallback | None = None,
     rng: np.random.Generator | None = None,
+    quiet: QuietTicks | None = None,
 ) -> Recording:
     """The staged loop: ticks 0 .. ``n_steps``, each stage a function on arrays.
 
@@ -516,6 +550,11 @@ def run_staged(
         ``progress(done, total)`` after each chunk of ticks.
     rng : numpy.random.Generator, optional
         Draws the wheels' slip in each drive step (:func:`drive_step`); None: no slip.
+    quiet : callable, optional
+        The decision's quiet ticks (:data:`QuietTicks`): with it, and stages that know
+        theirs (:mod:`firefleet.sim._quiet_stretch`), the ticks where only the wheels turn
+        run in one compiled call, the same numbers as tick by tick; None: every tick in
+        full.
 
     Returns
     -------
@@ -545,8 +584,14 @@ def run_staged(
     link = stages.link.init(n, dt)
     rec = Recorder(rec_steps, n)
     estimation_series = getattr(stages.estimation, "series", None)
+    from firefleet.sim import _quiet_stretch as qs  # it imports this module's types
+
+    fast = quiet is not None and qs.stretch_ok(stages, drive, rng)
+    consts = qs.stretch_constants(stack, n) if fast else None
+    rec_next = 0  # index of the next tick to record in rec_steps
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
-        for k in range(int(k0), int(k1)):
+        k = int(k0)
+        while k < int(k1):
             t = k * dt
             world = stages.world.step(world, t)
             readings = stages.sensors.read(world, drive)
@@ -554,6 +599,7 @@ def run_staged(
             if k > 0:  # the encoders have counted since the last tick
                 estimate = stages.estimation.step(estimate, drive, stack, readings)
             inputs = DecideInputs(t, k, stages.estimation.pose(estimate), readings, inbox)
+            before = state
             state, command = decide(state, inputs, params, dt)
             if estimation_series is not None:  # the estimator's own quantities
                 command = dataclasses.replace(
@@ -562,20 +608,47 @@ def run_staged(
             sent = command.outbox
             if command.actions:  # the world takes them at its next step
                 world = stages.world.act(world, command.actions, drive.pose)  # type: ignore[attr-defined]
-            if command.voltage_v is None:
+            stepped = None
+            if fast and command.voltage_v is None:  # the same tick in one compiled call
+                stepped, voltage = qs.drive_tick(
+                    drive,
+                    stack,
+                    command.reference_rad_s,
+                    world.voltage_scale,
+                    world.load_torque_n_m,
+                    consts,
+                )
+            elif command.voltage_v is None:
                 drive, voltage = speed_control(drive, command.reference_rad_s, stack)
             else:
                 voltage = command.voltage_v
-            if world.voltage_scale is not None:  # a motor fault
+            if world.voltage_scale is not None and stepped is None:  # a motor fault
                 voltage = voltage * world.voltage_scale[:, None]
             rec.record(
                 k, drive, command, voltage, world, stages.link.counters(link), force=command.done
             )
             if k == n_steps or command.done:
                 break
-            drive = drive_step(
-                drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
-            )
+            if stepped is not None:
+                drive = stepped
+            else:
+                drive = drive_step(
+                    drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
+                )
+            k += 1
+            if fast and state is before and not sent and command.voltage_v is None:
+                # the quiet stretch: ticks where only the wheels turn (module notes)
+                while rec_next < rec_steps.size and rec_steps[rec_next] < k:
+                    rec_next += 1
+                limit = min(int(k1), n_steps) - k
+                if rec_next < rec_steps.size:
+                    limit = min(limit, int(rec_steps[rec_next]) - k)
+                m = qs.quiet_ticks(stages, world, quiet, state, inputs, params, k, dt, limit)
+                if m > 0:
+                    drive, estimate, world = qs.run_stretch(
+                        m, k, drive, stack, stages, world, command, estimate, consts
+                    )
+                    k += m
         if progress is not None:
             progress(n_steps if command.done else min(int(k1), n_steps), n_steps)
         if command.done:

@@ -395,6 +395,25 @@ class RangeSensors:
         f = params.rate_hz * self.dt_s
         return k == 0 or f >= 1.0 or math.floor(k * f + 1e-9) != math.floor((k - 1) * f + 1e-9)
 
+    def quiet_ticks(self, limit: int) -> int:
+        """How many of the next ticks (at most ``limit``) scan nothing: :meth:`read` would
+        give the held readings; :meth:`skip` counts them instead (the loop's quiet
+        stretches)."""
+        tick, m = self._tick, 0
+        try:
+            while m < limit:
+                self._tick = tick + m
+                if any(self._due(p) or n not in self._last for n, p in self.sensors.items()):
+                    break
+                m += 1
+        finally:
+            self._tick = tick
+        return m
+
+    def skip(self, m: int) -> None:
+        """Count ``m`` ticks that scanned nothing (:meth:`quiet_ticks`)."""
+        self._tick += m
+
     def read(self, world: Any, drive: Any) -> dict[str, FloatArray]:
         """Readings by name at this tick (held from the last scan between scans)."""
         scans: dict[str, Callable[..., FloatArray]] = {

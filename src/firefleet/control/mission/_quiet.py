@@ -4,6 +4,8 @@ ten at the default periods), and the tank tests the full step shares with it."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numba
 import numpy as np
 
@@ -18,7 +20,7 @@ from firefleet.control.mission._params import (
 from firefleet.control.mission._plan import _empty_l
 from firefleet.control.mission._team import TacticsState
 
-__all__ = ["EPS_S", "is_quiet", "robots_quiet", "tank_flags"]
+__all__ = ["EPS_S", "is_quiet", "nothing_due", "quiet_ticks", "robots_quiet", "tank_flags"]
 
 EPS_S = 1e-9
 """Times this close count as equal (ticks summed in floating point) [s]."""
@@ -45,11 +47,7 @@ def is_quiet(state: TacticsState, obs: TacticsObservation, params: TacticsParams
     a plan), no detection, no robot lost, no tank to send or bring back, no robot in
     hot air. Nine ticks in ten at the default periods; an input of another shape is
     not quiet (the full step checks it)."""
-    t = float(obs.t_s)
-    if t >= state.next_coverage_s - EPS_S or t >= state.next_nav_s - EPS_S:
-        return False
-    since = t - state.last_plan_s
-    if (state.pending and since >= params.replan_s) or since >= params.explore_replan_s:
+    if not nothing_due(state, float(obs.t_s), params):
         return False
     if np.size(obs.fire_xy_m) or np.size(obs.person_xy_m):
         return False
@@ -80,6 +78,58 @@ def is_quiet(state: TacticsState, obs: TacticsObservation, params: TacticsParams
         0.98 * params.tank_l,
         params.retreat_c,
     )
+
+
+def nothing_due(state: TacticsState, t_s: float, params: TacticsParams) -> bool:
+    """The time tests of :func:`is_quiet`: at ``t_s`` no coverage, navigation or plan is
+    due (the rest of the tests read the observation)."""
+    t = t_s
+    if t >= state.next_coverage_s - EPS_S or t >= state.next_nav_s - EPS_S:
+        return False
+    since = t - state.last_plan_s
+    return not ((state.pending and since >= params.replan_s) or since >= params.explore_replan_s)
+
+
+def quiet_ticks(
+    state: TacticsState, obs: TacticsObservation, params: TacticsParams, times_s: list[float]
+) -> int:
+    """How many of the leading ``times_s`` are quiet ticks (:func:`is_quiet`) for the
+    observation ``obs`` with only its time changed: the whole test at the first, the time
+    tests (:func:`nothing_due`) at the others (the rest reads the same observation).
+
+    Examples
+    --------
+    >>> import dataclasses, itertools
+    >>> import numpy as np
+    >>> from firefleet.world import load_map
+    >>> from firefleet.control.mission import (
+    ...     TacticsObservation, TacticsParams, tactics_init, tactics_step)
+    >>> params = TacticsParams()
+    >>> pose = np.array([[1.0, 5.0, 0.0], [1.5, 4.6, 0.0]])
+    >>> state = tactics_init(load_map("office"), pose, params)
+    >>> obs = TacticsObservation(
+    ...     t_s=0.0, pose_m=pose, fire_xy_m=np.zeros((0, 2)), fire_robot=np.zeros(0, int),
+    ...     person_xy_m=np.zeros((0, 2)), person_robot=np.zeros(0, int), ranges={},
+    ...     tank_l=np.full(2, 20.0), damaged=np.zeros(2, bool), alive=np.ones(2, bool))
+    >>> state, _ = tactics_step(state, obs, params, 0.01)
+    >>> times = [0.01 * k for k in range(1, 30)]
+    >>> m = quiet_ticks(state, obs, params, times)
+    >>> m == sum(1 for _ in itertools.takewhile(
+    ...     lambda t: is_quiet(state, dataclasses.replace(obs, t_s=t), params),
+    ...     times))
+    True
+    >>> 1 <= m < len(times)  # quiet until the next navigation tick
+    True
+    """
+    if not times_s:
+        return 0
+    first = dataclasses.replace(obs, t_s=times_s[0])
+    if not is_quiet(state, first, params):
+        return 0
+    m = 1
+    while m < len(times_s) and nothing_due(state, times_s[m], params):
+        m += 1
+    return m
 
 
 @numba.njit(cache=True)

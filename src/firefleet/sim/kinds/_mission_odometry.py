@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
-from firefleet.sim.drive import DriveStack, DriveState, _wheels_arc
+import numpy as np
+
+from firefleet.sim._kernels._stretch import odometry_arc
+from firefleet.sim.drive import DriveStack, DriveState
 from firefleet.sim.loop import Messages, Odometry, OdometryState
 
 __all__ = ["MissionOdometry"]
@@ -14,9 +18,9 @@ __all__ = ["MissionOdometry"]
 class MissionOdometry(Odometry):
     """:class:`~firefleet.sim.loop.Odometry` at the mission's 100 Hz: the encoders'
     count differences moved along their arc with the nominal geometry, the arithmetic
-    of :func:`~firefleet.sim.drive.dead_reckoning` without
-    :func:`~firefleet.models.diff_drive_step`'s checks of its inputs (the loop's float64
-    (N, 3) and (N, 2) arrays; half the stage's cost at 3 robots).
+    of :func:`~firefleet.sim.drive.dead_reckoning` in one compiled call
+    (:func:`~firefleet.sim._kernels._stretch.odometry_arc`, the scalar arc step of the
+    kernels) without :func:`~firefleet.models.diff_drive_step`'s checks of its inputs.
 
     Examples
     --------
@@ -36,10 +40,15 @@ class MissionOdometry(Odometry):
     (True, True)
     """
 
+    arc_odometry: ClassVar[bool] = True  # the loop's quiet stretches compute this step
+
     def step(
         self, state: OdometryState, drive: DriveState, stack: DriveStack, readings: Messages
     ) -> OdometryState:
         """The estimate moved by the counts since its last update (readings unused)."""
         counts = drive.encoder.history[-1]
-        counted = (counts - state.counts) * stack.count_angle_rad
-        return OdometryState(pose=_wheels_arc(state.pose, counted, stack.geometry), counts=counts)
+        g = stack.geometry
+        nominal = np.array([g.wheel_radius_m, g.axle_length_m, stack.count_angle_rad])
+        return OdometryState(
+            pose=odometry_arc(state.pose, state.counts, counts, nominal), counts=counts
+        )

@@ -249,6 +249,14 @@ class MissionWorld:
         log["smoke_per_m"].append(np.round(state.smoke_per_m, 2).astype(np.float16))
         log["next_record_s"] = log["next_record_s"] + self.record_s
 
+    def quiet_ticks(self, state: MissionWorldState, k: int, dt_s: float, limit: int) -> int:
+        """How many of the ticks ``k, k + 1, ...`` (at most ``limit``) come before the next
+        world step: :meth:`step` only moves the time (the loop's quiet stretches)."""
+        m = 0
+        while m < limit and (k + m) * dt_s < state.next_s - 1e-9:
+            m += 1
+        return m
+
     def step(self, state: MissionWorldState, t_s: float) -> MissionWorldState:
         """The world at ``t_s`` (it changes every ``world_step_s``)."""
         if t_s < state.next_s - 1e-9:
@@ -410,6 +418,25 @@ class MissionSensors:
     rng: np.random.Generator
     depth_noise: float = 0.03
     visible: Any = None  # a stereo-only team's camera (_mission_smoke.VisibleDetector)
+
+    def quiet_ticks(self, world: MissionWorldState, k: int, dt_s: float, limit: int) -> int:
+        """How many of the ticks ``k, k + 1, ...`` (at most ``limit``) read nothing new: no
+        thermal frame, no range scan due (the loop's quiet stretches; :meth:`skip`)."""
+        m = 0
+        while m < limit and (k + m) % self.every != 0:
+            m += 1
+        if m and self.ranging is not None:
+            m = min(m, self.ranging.quiet_ticks(m))
+        return m
+
+    def skip(self, world: MissionWorldState, poses: FloatArray) -> None:
+        """What :meth:`read` does at quiet ticks with the true poses (m, N, 3) of each:
+        the range sensors count the ticks, the contact test notes each tick's poses."""
+        if self.ranging is not None:
+            self.ranging.skip(poses.shape[0])
+        if self.world.contacts is not None:
+            for pose in poses:
+                self.world.contacts.check(world.log, pose)
 
     def read(self, world: MissionWorldState, drive: DriveState) -> Messages:
         """Readings at this tick, by name (module notes)."""

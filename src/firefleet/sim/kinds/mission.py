@@ -329,42 +329,13 @@ def _on_map(
     return xy[ok], robot[ok], pick[ok, 4]
 
 
-def mission_decide(
-    state: Any, inputs: DecideInputs, params: MissionParams, dt_s: float
-) -> tuple[Any, WheelCommand]:
-    """The team's decision at a tick (module notes).
+def _observation(
+    inputs: DecideInputs, pose: FloatArray, params: MissionParams
+) -> tuple[Any, FloatArray]:
+    """The tactics' observation at a tick, and the thermal detections' rows (K, 5)."""
+    from firefleet.control.mission import TacticsObservation
 
-    Parameters
-    ----------
-    state : MissionMemory or None
-        The team's brain and the last command (None for a run without the team).
-    inputs : DecideInputs
-        The pose estimate (N, 3) and the readings: ranges, ``thermal_detections``
-        (K, 5: robot, kind, bearing [rad], range [m], peak [C]), ``tank_l``,
-        ``damaged``, ``looked``.
-    params : MissionParams
-    dt_s : float
-
-    Returns
-    -------
-    state, WheelCommand
-        Wheel references, the series (``mode``, ``spray``, ``tank_l``) and the actions
-        (``spray``, ``refill``, the detections on the map, the confirmed victims, the
-        coverage) for the world.
-    """
-    from firefleet.control.mission import TacticsObservation, tactics_step
-
-    pose = inputs.pose_estimate
-    if pose is None:
-        raise InputError("mission needs a pose estimate")
-    n = pose.shape[0]
     tank = np.asarray(inputs.readings["tank_l"])
-    if not params.robots:
-        zero = np.zeros((n, 2))
-        return state, WheelCommand(reference_rad_s=zero, series={"tank_l": tank})
-    if inputs.t_s < params.arrive_s:  # the team has not entered yet: it waits, idle
-        idle = {"mode": np.full(n, 4.0), "spray": np.zeros(n), "tank_l": tank}  # MODES[4]
-        return state, WheelCommand(reference_rad_s=np.zeros((n, 2)), series=idle)
     rows = np.asarray(inputs.readings["thermal_detections"]).reshape(-1, 5)
     fire_xy, fire_robot, fire_peak = _on_map(rows, pose, FIRE)
     person_xy, person_robot, _ = _on_map(rows, pose, PERSON)
@@ -392,6 +363,75 @@ def mission_decide(
         if "air_c" in inputs.readings
         else None,
     )
+    return obs, rows
+
+
+def mission_quiet_ticks(
+    state: Any, inputs: DecideInputs, params: MissionParams, k: int, dt_s: float, limit: int
+) -> int:
+    """The decision's quiet ticks (:data:`firefleet.sim.loop.QuietTicks`): after a tick it
+    held its command (:class:`MissionMemory`), the ticks ``k, k + 1, ...`` at which the
+    tactics' step is quiet (:func:`firefleet.control.mission._quiet.quiet_ticks`) with
+    the same readings: the same state and the held command again (no frame, no
+    detection, no robot newly damaged: the stages hold those)."""
+    from firefleet.control.mission._quiet import quiet_ticks
+
+    pose = inputs.pose_estimate
+    if not params.robots or state is None or state.held is None or pose is None:
+        return 0
+    if k * dt_s < params.arrive_s:
+        return 0
+    obs, rows = _observation(inputs, pose, params)
+    if rows.shape[0] or obs.looked.any() or not np.array_equal(obs.damaged, state.damaged):
+        return 0
+    times = [(k + j) * dt_s for j in range(limit)]
+    return quiet_ticks(state.tactics, obs, params.tactics, times)
+
+
+def mission_decide(
+    state: Any, inputs: DecideInputs, params: MissionParams, dt_s: float
+) -> tuple[Any, WheelCommand]:
+    """The team's decision at a tick (module notes).
+
+    Parameters
+    ----------
+    state : MissionMemory or None
+        The team's brain and the last command (None for a run without the team).
+    inputs : DecideInputs
+        The pose estimate (N, 3) and the readings: ranges, ``thermal_detections``
+        (K, 5: robot, kind, bearing [rad], range [m], peak [C]), ``tank_l``,
+        ``damaged``, ``looked``.
+    params : MissionParams
+    dt_s : float
+
+    Returns
+    -------
+    state, WheelCommand
+        Wheel references, the series (``mode``, ``spray``, ``tank_l``) and the actions
+        (``spray``, ``refill``, the detections on the map, the confirmed victims, the
+        coverage) for the world.
+    """
+    from firefleet.control.mission import tactics_step
+
+    pose = inputs.pose_estimate
+    if pose is None:
+        raise InputError("mission needs a pose estimate")
+    n = pose.shape[0]
+    tank = np.asarray(inputs.readings["tank_l"])
+    if not params.robots:
+        zero = np.zeros((n, 2))
+        return state, WheelCommand(reference_rad_s=zero, series={"tank_l": tank})
+    if inputs.t_s < params.arrive_s:  # the team has not entered yet: it waits, idle
+        idle = {"mode": np.full(n, 4.0), "spray": np.zeros(n), "tank_l": tank}  # MODES[4]
+        return state, WheelCommand(reference_rad_s=np.zeros((n, 2)), series=idle)
+    obs, rows = _observation(inputs, pose, params)
+    fire_xy, fire_robot, person_xy, person_robot = (
+        obs.fire_xy_m,
+        obs.fire_robot,
+        obs.person_xy_m,
+        obs.person_robot,
+    )
+    damaged, looked, tank = obs.damaged, obs.looked, obs.tank_l
     memory = state
     held = memory.held
     state, orders = tactics_step(memory.tactics, obs, params.tactics, dt_s)
@@ -482,6 +522,7 @@ KINDS = (
             decide=mission_decide,
             series=("mode", "spray", "tank_l"),
             uses_estimate=True,
+            quiet_ticks=mission_quiet_ticks,
         ),
         stages=mission_stages,
         list_items=(("victims_found_s", "victim"), ("stereo_victims_found_s", "victim")),
