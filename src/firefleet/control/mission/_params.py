@@ -225,7 +225,7 @@ class TacticsParams:
     nav: NavigationParams = field(default_factory=NavigationParams)
     # explore
     view_min_m2: float = 0.125
-    view_max_candidates: int = 40000
+    view_max_candidates: int = 12000
     view_clear_m: float = 0.2
 
     def __post_init__(self) -> None:

@@ -185,7 +185,7 @@ def view_table(
     range_m: float,
     near_m: float,
     clear_m: float = 0.4,
-    max_candidates: int = 40000,
+    max_candidates: int = 12000,
 ) -> ViewTable:
     """The view table of a coarse map (module notes).
 
@@ -242,11 +242,11 @@ def view_table(
             float(near_m), float(cm.cell_m), out_ptr, out_cells, fill,
         )  # fmt: skip
 
-    run(ptr, np.zeros(0, dtype=np.int64), False)
+    run(ptr, np.zeros(0, dtype=np.int32), False)
     ptr = np.cumsum(ptr)
-    cells = np.zeros(int(ptr[-1]), dtype=np.int64)
+    cells = np.zeros(int(ptr[-1]), dtype=np.int32)
     run(ptr, cells, True)
-    owner = np.repeat(np.arange(len(rc), dtype=np.int64), np.diff(ptr))
+    owner = np.repeat(np.arange(len(rc), dtype=np.int32), np.diff(ptr))
     order = np.argsort(cells, kind="stable")
     tcand = owner[order]
     tptr = np.zeros(hc * wc + 1, dtype=np.int64)
