@@ -64,9 +64,9 @@ class ViewTable:
         Where a robot stands there (the cell's goal point) [m].
     index : ndarray of int, shape (Hc Wc,)
         The candidate of each flat coarse cell (-1: none).
-    ptr, cells : ndarray of int
+    ptr, cells : ndarray of int (int64, int32)
         Sparse rows: candidate ``c`` covers the flat cells ``cells[ptr[c]:ptr[c + 1]]``.
-    tptr, tcand : ndarray of int
+    tptr, tcand : ndarray of int (int64, int32)
         The transpose: cell ``k`` is covered from the candidates
         ``tcand[tptr[k]:tptr[k + 1]]``.
     cell_m2 : float
@@ -77,9 +77,9 @@ class ViewTable:
     xy_m: FloatArray
     index: IntArray
     ptr: IntArray
-    cells: IntArray
+    cells: np.ndarray
     tptr: IntArray
-    tcand: IntArray
+    tcand: np.ndarray
     cell_m2: float
 
     def __len__(self) -> int:
@@ -236,7 +236,7 @@ def view_table(
     ox, oy, res = float(grid.origin_m[0]), float(grid.origin_m[1]), float(grid.resolution_m)
     dx, dy = np.cos(ang), np.sin(ang)
 
-    def run(out_ptr: IntArray, out_cells: IntArray, fill: bool) -> None:
+    def run(out_ptr: IntArray, out_cells: np.ndarray, fill: bool) -> None:
         _scan_rows(
             xy_c, opaque, int(fh), int(fw), ox, oy, res, int(cm.factor), dx, dy, dist,
             float(near_m), float(cm.cell_m), out_ptr, out_cells, fill,
