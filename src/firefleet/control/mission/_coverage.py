@@ -29,7 +29,7 @@ distance limit (``scipy.sparse.csgraph.dijkstra``'s ``limit``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.ndimage as ndi
@@ -76,6 +76,9 @@ class CoarseMap:
         Free map cells in each coarse cell (the explored fraction without the map grid).
     graph : scipy.sparse.csr_matrix, shape (Hc Wc, Hc Wc)
         Travel graph of the standable cells [m].
+    cache : dict
+        Tables computed once per map and kept (``._views.view_table``'s, by their
+        parameters); it changes no result.
     """
 
     grid: OccupancyGrid
@@ -88,6 +91,7 @@ class CoarseMap:
     nearest_standable: IntArray
     graph: scipy.sparse.csr_matrix
     free_count: IntArray
+    cache: dict[tuple[object, ...], object] = field(default_factory=dict, repr=False)
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -166,6 +166,17 @@ class TacticsParams:
     confirm_watch_s : float
         A confirmer that has stood this long where it can confirm its victim without
         confirming gives the victim up [s] (:func:`._knowledge.watch_victims`).
+    view_min_m2 : float
+        Least uncovered floor a viewpoint must cover to be worth a trip [m^2]
+        (:mod:`._views`): two coarse cells at the default 0.25 m.
+    view_max_candidates : int
+        Most candidate viewpoints in the view table (the lattice thins on larger maps;
+        :func:`._views.view_table`).
+    view_clear_m : float
+        A viewpoint lies this much farther from the walls than the navigation's
+        ``robot_radius_m + margin_m``, where the place is wide enough (in a narrower one,
+        its middle) [m].
+
     """
 
     standoff_m: float = 1.5
@@ -221,6 +232,10 @@ class TacticsParams:
     # people
     person_wall_m: float = 0.15
     confirm_watch_s: float = 15.0
+    # explore
+    view_min_m2: float = 0.125
+    view_max_candidates: int = 12000
+    view_clear_m: float = 0.2
 
     def __post_init__(self) -> None:
         check_fields(
@@ -256,8 +271,10 @@ class TacticsParams:
                 "scan_omega_rad_s",
                 "stall_s",
                 "face_gain",
+                "view_min_m2",
             ),
             non_negative=(
+                "view_clear_m",
                 "low_tank_frac",
                 "low_tank_penalty_m",
                 "burgard_beta",
@@ -286,6 +303,7 @@ class TacticsParams:
             "victim_out_looks",
             "fire_robots_min",
             "frontier_min_cells",
+            "view_max_candidates",
         ):
             if int(getattr(self, name)) < 1:
                 raise InputError(f"tactics.{name} must be >= 1, got {getattr(self, name)}")

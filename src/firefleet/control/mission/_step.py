@@ -14,6 +14,7 @@ from firefleet.control.mission._coverage import (
     cone_coverage,
     viewpoints,
 )
+from firefleet.control.mission._explore import explore_views, scan_turn
 from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
 from firefleet.control.mission._knowledge import fires_of, update_knowledge, watch_victims
 from firefleet.control.mission._params import (
@@ -31,7 +32,6 @@ from firefleet.control.mission._people import confirm_sight
 from firefleet.control.mission._plan import (
     allocate,
     cut_demand,
-    explore,
     fire_demand,
     task_distances,
 )
@@ -175,45 +175,19 @@ def _plan(
     mode[task_victim >= 0] = CONFIRM
     # the rest explore
     free = available & (task_fire < 0) & (task_victim < 0)
-    # an explorer's target is open while uncovered floor lies within probe_m of it
-    todo = cm.floor & ~state.covered_coarse
-    kp = max(1, round(params.probe_m / cm.cell_m))
-    near_todo = ndi.maximum_filter(todo, size=2 * kp + 1, mode="constant")
-    tc = state.explore_cell
-    goal_open = np.isfinite(state.goal_xy_m[:, 0]) & (tc[:, 0] >= 0)
-    goal_open &= near_todo[np.maximum(tc[:, 0], 0), np.maximum(tc[:, 1], 0)]
-    # an explorer keeps its target on its way, and once there while it turns to look
-    # at it (the camera names no one nearer than sensing_near_m: the floor by the target
-    # is covered by the turn; the watchdog gives the target up after stall_s)
+    # explorers: viewpoints chosen by the floor a turn there covers (_explore, _views)
     status = state.nav.status
-    going = np.array([s in ("moving", "waiting") for s in status])
-    there = np.array([s == "arrived" for s in status]) & goal_open
-    keep = (going | there) & (state.mode == EXPLORE)
+    going = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
+    there = np.array([s == "arrived" for s in status]) & (state.mode == EXPLORE)
     hot = _near_fire(cm, k.spot_xy_m, params.explore_fire_m)
-    cells = explore(
-        cm,
-        state.covered_coarse,
-        pose,
-        free,
-        state.explore_cell,
-        keep,
-        goal_open,
-        state.excluded | hot,
-        params,
-    )
+    cells = explore_views(
+        cm, state.covered_coarse, pose, free, state.explore_cell, going, there,
+        state.excluded | hot, params,
+    )  # fmt: skip
     has = free & (cells[:, 0] >= 0)
-    same = has & np.all(cells == state.explore_cell, axis=1) & keep
+    same = has & np.all(cells == state.explore_cell, axis=1) & (going | there)
     fresh = has & ~same
-    view = viewpoints(
-        cm,
-        state.covered_coarse,
-        cells[fresh],
-        params.probe_m,
-        params.sensing_near_m + 0.25,
-        max(params.view_far_m, params.sensing_near_m + 0.5),
-        avoid=hot,
-    )
-    goals[fresh] = cm.goal_xy(view)
+    goals[fresh] = cm.goal_xy(cells[fresh])
     mode[has] = EXPLORE
     idle = free & ~has
     goals[idle] = np.nan
@@ -360,7 +334,9 @@ def _orders(
         pending = pending or gave_up
     scan = (mode == EXPLORE) & arrived
     v[scan] = 0.0
-    w[scan] = params.scan_omega_rad_s
+    w[scan] = scan_turn(state.coarse, state.covered_coarse, pose, state.explore_cell, scan, params)[
+        scan
+    ]
     # refilling only by the refill point (not where a blocked path left it): within
     # refill_radius_m of it, through the robot's spot and the spot nearest the point
     spots_r = state.refill_spots_m
@@ -505,15 +481,18 @@ def _watchdog(
     state: TacticsState, pose: FloatArray, t: float, params: TacticsParams
 ) -> TacticsState:
     """Explorers that neither reach their goal nor come 0.2 m closer to it in
-    ``stall_s`` (or stand within the goal tolerance of it without navigation calling
-    it reached) give their frontier up; the team re-plans."""
+    ``stall_s`` (one arrived there: and a whole turn more) give their viewpoint up (or
+    stand within the goal tolerance of it without navigation calling it reached); the
+    team re-plans."""
     goal = state.goal_xy_m
     d = np.hypot(pose[:, 0] - goal[:, 0], pose[:, 1] - goal[:, 1])
     better = np.isfinite(d) & (d < state.closest_m - 0.2)
     closest = np.where(better, d, state.closest_m)
     since = np.where(better, t, state.closest_s)
     explorers = state.mode == EXPLORE
-    stalled = explorers & np.isfinite(d) & (t - since >= params.stall_s)
+    turn_s = 2.0 * math.pi / params.scan_omega_rad_s
+    there = np.array([s == "arrived" for s in state.nav.status])
+    stalled = explorers & np.isfinite(d) & (t - since >= params.stall_s + there * turn_s)
     near = explorers & (d <= params.nav.goal_tolerance_m)
     if not (stalled.any() or near.any()):
         return replace(state, closest_m=closest, closest_s=since)
