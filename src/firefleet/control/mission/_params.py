@@ -160,6 +160,19 @@ class TacticsParams:
         Smallest frontier kept [coarse cells].
     nav : NavigationParams
         The navigation controller's constants.
+    hot_forget_s : float
+        Slots keep ``standoff_m`` from a hot place for this long after a robot last
+        found it hot [s] (:mod:`._hot`: the gas by a door cools once its flames are
+        soaked; a place kept for good barred the fighters from the fire).
+    scout_m : float
+        A fighter with no flame to aim at, or no slot with a shot, looks at the floor
+        within this distance of its fire's spots, through open floor [m] (:mod:`._scout`).
+    scout_stale_s : float
+        ... that no camera has had in view for this long [s].
+    scout_view_m : float
+        How far a camera's look counts as seeing the floor for the fire [m].
+    scout_near_m, scout_far_m : float
+        A scout stands this near to this far from the floor it looks at [m].
     """
 
     standoff_m: float = 1.5
@@ -212,6 +225,13 @@ class TacticsParams:
     keep_bonus_m: float = 2.0
     frontier_min_cells: int = 3
     nav: NavigationParams = field(default_factory=NavigationParams)
+    # fight
+    hot_forget_s: float = 30.0
+    scout_m: float = 3.0
+    scout_stale_s: float = 30.0
+    scout_view_m: float = 5.0
+    scout_near_m: float = 1.5
+    scout_far_m: float = 3.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -247,6 +267,12 @@ class TacticsParams:
                 "scan_omega_rad_s",
                 "stall_s",
                 "face_gain",
+                "hot_forget_s",
+                "scout_m",
+                "scout_stale_s",
+                "scout_view_m",
+                "scout_near_m",
+                "scout_far_m",
             ),
             non_negative=(
                 "low_tank_frac",

@@ -14,7 +14,13 @@ from firefleet.control.mission._coverage import (
     cone_coverage,
     viewpoints,
 )
-from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
+from firefleet.control.mission._fight import (
+    dry_flames,
+    fight_goals,
+    fire_costmap,
+    flame_guard,
+)
+from firefleet.control.mission._hot import mark_hot
 from firefleet.control.mission._knowledge import fires_of, update_knowledge
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -36,6 +42,7 @@ from firefleet.control.mission._plan import (
 )
 from firefleet.control.mission._quiet import EPS_S as _EPS_S
 from firefleet.control.mission._quiet import is_quiet, tank_flags
+from firefleet.control.mission._scout import seen_update
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.mission._water import (
     add_water,
@@ -341,7 +348,8 @@ def _orders(
     stop = (mode == DAMAGED) | refilling | (mode == IDLE)
     v[stop] = 0.0
     w[stop] = 0.0
-    if params.flame_guard_m > 0.0 and k.spot_flame.any():
+    flames = dry_flames(state, params)  # soaked: the way in once the door's flames are out
+    if params.flame_guard_m > 0.0 and len(flames):
         # every robot but a refiller stops short of flames (a refiller leaves: on
         # mission-office seed 1 two were held in the fire's room by the flames at its door)
         who = mode != REFILL
@@ -350,7 +358,7 @@ def _orders(
                 v[who],
                 w[who],
                 pose[who],
-                k.spot_xy_m[k.spot_flame],
+                flames,
                 params.flame_guard_m,
                 math.radians(60.0),
                 w_max,
@@ -421,29 +429,25 @@ def _too_hot(
     working: BoolArray,
     params: TacticsParams,
     near: BoolArray | None = None,
+    t_s: float = 0.0,
 ) -> TacticsState:
     """A robot in air of ``retreat_c`` or more, or seeing flames nearer than
     ``flame_guard_m`` (``near``: its probe lags the air by seconds, its camera does
-    not), marks its place hot (once per half metre); a fighter there gets a new slot at
-    the next plan."""
+    not), marks its place hot at ``t_s`` (once per half metre: a place marked again
+    is refreshed, :func:`._hot.mark_hot`); a fighter there gets a new slot at the next
+    plan."""
     hot = working & (air_c >= params.retreat_c) if air_c is not None else np.zeros_like(working)
     if near is not None:
         hot |= working & near
     if not hot.any():
         return state
-    known = state.hot_xy_m
-    new: list[FloatArray] = []
-    for i in map(int, np.flatnonzero(hot)):
-        pts = np.vstack([known, *new]) if new else known
-        if len(pts) == 0 or np.hypot(*(pts - pose[i, :2]).T).min() > 0.5:
-            new.append(pose[i : i + 1, :2].copy())
-    if not new:
-        return state
-    fresh = np.vstack(new)
+    xy, ts, added = mark_hot(state.hot_xy_m, state.hot_s, pose[hot, :2], t_s)
+    if not added:
+        return replace(state, hot_xy_m=xy, hot_s=ts)
     goals = state.goal_xy_m.copy()
     leave = hot & (state.mode == FIGHT)
     goals[leave] = np.nan
-    return replace(state, hot_xy_m=np.vstack([known, fresh]), goal_xy_m=goals, pending=True)
+    return replace(state, hot_xy_m=xy, hot_s=ts, goal_xy_m=goals, pending=True)
 
 
 def _dropped(state: TacticsState, pose: FloatArray, lost: BoolArray) -> TacticsState:
@@ -598,7 +602,7 @@ def tactics_step(
         near[fr[close]] = True
     if obs.air_c is not None or near.any():
         air = None if obs.air_c is None else np.asarray(obs.air_c, dtype=float)
-        state = _too_hot(state, pose, air, working, params, near)
+        state = _too_hot(state, pose, air, working, params, near, t)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(
             state.coarse,
@@ -610,9 +614,13 @@ def tactics_step(
         )
         covered = state.covered_coarse.copy()
         covered[rows, cols] = True
+        seen = seen_update(
+            state.fire_seen_s, state.coarse, pose[working], t, params.scout_view_m, params.hfov_rad
+        )
         state = replace(
             state,
             covered_coarse=covered,
+            fire_seen_s=seen,
             next_coverage_s=_next(state.next_coverage_s, params.coverage_period_s, t),
         )
     if t >= state.next_nav_s - _EPS_S:

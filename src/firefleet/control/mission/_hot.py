@@ -1,0 +1,94 @@
+"""The team's hot places: where a robot's air reached the retreat temperature, or its
+camera saw flames within the guard distance, and for how long the fighters' slots keep
+away from them.
+
+A place is hot while the fire next to it burns; once the flames there are soaked the gas
+cools within tens of seconds (the field's heat halves in about that time by a door:
+mission-office seed 2, the air at a fighter 1 m from the fire room's door fell from 190
+C to 40 C in 30 s once the door's flames were out). A hot place kept for good barred
+the fighters from the door, and from the flames behind it, for the rest of a run
+(mission-office seed 2: nine places marked by 250 s, every slot with a shot at the last
+flames within 1.5 m of one, the fighters standing 350 s without a shot). So a place is
+avoided for ``forget_s`` after it was last marked; a robot that finds it hot again
+marks it again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from firefleet._typing import BoolArray, FloatArray
+
+__all__ = ["live_hot", "mark_hot"]
+
+
+def mark_hot(
+    hot_xy_m: FloatArray,
+    hot_s: FloatArray,
+    xy_m: FloatArray,
+    t_s: float,
+    merge_m: float = 0.5,
+) -> tuple[FloatArray, FloatArray, bool]:
+    """The hot places after robots at ``xy_m`` (K, 2) [m] found their air hot at ``t_s``.
+
+    A point within ``merge_m`` of a known place refreshes that place's time; one farther
+    from all (and from the points before it) is a new place.
+
+    Parameters
+    ----------
+    hot_xy_m : ndarray, shape (P, 2)
+        Known hot places [m].
+    hot_s : ndarray, shape (P,) or (0,)
+        When each was last marked [s] (empty with P > 0: all at ``t_s``).
+    xy_m : ndarray, shape (K, 2)
+    t_s : float
+    merge_m : float
+
+    Returns
+    -------
+    hot_xy_m : ndarray, shape (P', 2)
+    hot_s : ndarray, shape (P',)
+    added : bool
+        Whether a new place was added.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> xy, ts, added = mark_hot(np.array([[0.0, 0.0]]), np.array([5.0]),
+    ...                          np.array([[0.3, 0.0], [2.0, 0.0], [2.2, 0.0]]), 9.0)
+    >>> xy.tolist(), ts.tolist(), added
+    ([[0.0, 0.0], [2.0, 0.0]], [9.0, 9.0], True)
+    """
+    pts = np.asarray(hot_xy_m, dtype=float).reshape(-1, 2).copy()
+    ts = np.asarray(hot_s, dtype=float).reshape(-1)
+    ts = np.full(len(pts), float(t_s)) if len(ts) != len(pts) else ts.copy()
+    added = False
+    for p in np.asarray(xy_m, dtype=float).reshape(-1, 2):
+        d = np.hypot(pts[:, 0] - p[0], pts[:, 1] - p[1]) if len(pts) else np.zeros(0)
+        near = d <= merge_m
+        if near.any():
+            ts[near] = float(t_s)
+        else:
+            pts = np.vstack([pts, p[None]])
+            ts = np.append(ts, float(t_s))
+            added = True
+    return pts, ts, added
+
+
+def live_hot(hot_xy_m: FloatArray, hot_s: FloatArray, t_s: float, forget_s: float) -> FloatArray:
+    """The hot places marked within ``forget_s`` before ``t_s`` (M, 2) [m] (places with
+    no time recorded count as live).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> live_hot(np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([0.0, 50.0]), 60.0, 30.0).tolist()
+    [[1.0, 0.0]]
+    """
+    pts = np.asarray(hot_xy_m, dtype=float).reshape(-1, 2)
+    ts = np.asarray(hot_s, dtype=float).reshape(-1)
+    if len(ts) != len(pts):
+        return pts
+    keep: BoolArray = t_s - ts < forget_s
+    out: FloatArray = pts[keep]
+    return out
