@@ -67,13 +67,24 @@ def _standable(costmap: Costmap, xy_m: FloatArray) -> BoolArray:
 
 
 def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
-    """The believed flames (F, 2) [m] on cells the team's ledger does not hold soaked:
-    where the air is past a robot's rating. A soaked flame is out (its gas cools), so a
-    door whose flames the team soaked is the way in to the flames behind it; the
-    robots' probes and cameras still mark hot places (``_step._too_hot``)."""
+    """The believed flames (F, 2) [m] a robot keeps out of: those on cells the team's
+    ledger does not hold soaked, and the soaked ones within ``standoff_m`` of them.
+
+    A soaked flame with no dry one near is out and its gas cools, so a door whose
+    flames the team soaked is the way in to the fire behind it; a soaked cell beside
+    cells still burning lies in their gas (mission-office seeds 0 and 4, with every
+    soaked flame let through: three fighters entered the fire room's door while the
+    flames beside it burned, and were damaged within 2 s of their probes reading 36-80
+    C). The robots' probes and cameras still mark hot places (``_step._too_hot``).
+    """
     k = state.knowledge
     fl = k.spot_xy_m[k.spot_flame]
-    out: FloatArray = fl[~soaked_at(k.wet_l_m2, state.coarse, fl, params.soak_l_m2)]
+    wet = soaked_at(k.wet_l_m2, state.coarse, fl, params.soak_l_m2)
+    dry = fl[~wet]
+    if len(dry) and wet.any():
+        d = np.hypot(fl[:, None, 0] - dry[None, :, 0], fl[:, None, 1] - dry[None, :, 1])
+        wet &= d.min(axis=1) > params.standoff_m
+    out: FloatArray = fl[~wet]
     return out
 
 

@@ -19,7 +19,7 @@ import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
 
-__all__ = ["live_hot", "mark_hot"]
+__all__ = ["live_hot", "mark_hot", "probe_estimate"]
 
 
 def mark_hot(
@@ -92,3 +92,62 @@ def live_hot(hot_xy_m: FloatArray, hot_s: FloatArray, t_s: float, forget_s: floa
     keep: BoolArray = t_s - ts < forget_s
     out: FloatArray = pts[keep]
     return out
+
+
+def probe_estimate(
+    air_c: FloatArray,
+    prev_c: FloatArray,
+    prev_s: float,
+    t_s: float,
+    lag_s: float,
+    window_s: float = 1.0,
+) -> tuple[FloatArray, FloatArray, float]:
+    """The air at each robot, from its probe's reading and the probe's lag.
+
+    A sheathed probe reads the air through a first-order lag, ``dT_read/dt = (T_air -
+    T_read) / lag_s``, so ``T_air = T_read + lag_s dT_read/dt``: a robot driving into hot
+    gas reads it ``lag_s`` late (mission-office seed 4: a fighter in a burning room's
+    door read 91 C while its air was past 250 C; it stood there, its reading climbing
+    to 215 C before it left, and was damaged). The slope is taken over at least
+    ``window_s`` (the readings held in ``prev_c`` from ``prev_s``); a falling reading
+    counts as steady (the estimate is never below the reading).
+
+    Parameters
+    ----------
+    air_c : ndarray, shape (N,)
+        This tick's readings [C].
+    prev_c : ndarray, shape (N,) or (0,)
+        The readings the slope starts from [C] (another shape: none yet).
+    prev_s : float
+        Their time [s].
+    t_s, lag_s, window_s : float
+        Now [s]; the probe's time constant [s]; the slope's least span [s].
+
+    Returns
+    -------
+    air_c : ndarray, shape (N,)
+        The estimated air [C].
+    prev_c : ndarray, shape (N,)
+    prev_s : float
+        The readings to take the next slope from (renewed every ``window_s``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> est, prev, ts = probe_estimate(np.array([91.0, 40.0]), np.array([50.0, 45.0]),
+    ...                                169.0, 171.0, 10.0)
+    >>> est.tolist(), prev.tolist(), ts  # 20.5 C/s for 10 s; a falling one as read
+    ([296.0, 40.0], [91.0, 40.0], 171.0)
+    """
+    air = np.asarray(air_c, dtype=float)
+    prev = np.asarray(prev_c, dtype=float)
+    if prev.shape != air.shape or not np.isfinite(prev_s):
+        return air.copy(), air.copy(), float(t_s)
+    dt = t_s - prev_s
+    if dt <= 0.0:
+        return air.copy(), prev, prev_s
+    slope = np.maximum(air - prev, 0.0) / dt
+    est: FloatArray = air + lag_s * slope
+    if dt >= window_s:
+        return est, air.copy(), float(t_s)
+    return est, prev, prev_s

@@ -173,6 +173,10 @@ class TacticsParams:
         How far a camera's look counts as seeing the floor for the fire [m].
     scout_near_m, scout_far_m : float
         A scout stands this near to this far from the floor it looks at [m].
+    probe_lag_s : float
+        The air probe's time constant [s] (the kind's default PT100: 10 s): a robot
+        retreats when its reading plus this times the reading's rise per second
+        reaches ``retreat_c`` (:func:`._hot.probe_estimate`).
     """
 
     standoff_m: float = 1.5
@@ -232,6 +236,7 @@ class TacticsParams:
     scout_view_m: float = 5.0
     scout_near_m: float = 1.5
     scout_far_m: float = 3.0
+    probe_lag_s: float = 10.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -288,6 +293,7 @@ class TacticsParams:
                 "fire_cost",
                 "fire_block_m",
                 "flame_guard_m",
+                "probe_lag_s",
             ),
         )
         for name in (

@@ -20,7 +20,7 @@ from firefleet.control.mission._fight import (
     fire_costmap,
     flame_guard,
 )
-from firefleet.control.mission._hot import mark_hot
+from firefleet.control.mission._hot import live_hot, mark_hot, probe_estimate
 from firefleet.control.mission._knowledge import fires_of, update_knowledge
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -442,10 +442,16 @@ def _too_hot(
     if not hot.any():
         return state
     xy, ts, added = mark_hot(state.hot_xy_m, state.hot_s, pose[hot, :2], t_s)
-    if not added:
-        return replace(state, hot_xy_m=xy, hot_s=ts)
+    # a fighter in hot air leaves a slot within standoff_m of a hot place, also one
+    # known before (it came back once the place was forgotten), or the place where it
+    # stopped short of its slot (mission-office seed 4: 20 s in a door's gas at 163 C)
     goals = state.goal_xy_m.copy()
-    leave = hot & (state.mode == FIGHT)
+    live = live_hot(xy, ts, t_s, params.hot_forget_s)
+    gap = np.hypot(goals[:, None, 0] - live[None, :, 0], goals[:, None, 1] - live[None, :, 1])
+    settled = np.array([st == "arrived" for st in state.nav.status])  # held up there
+    leave = hot & (state.mode == FIGHT) & (np.any(gap < params.standoff_m, axis=1) | settled)
+    if not (added or leave.any()):
+        return replace(state, hot_xy_m=xy, hot_s=ts)
     goals[leave] = np.nan
     return replace(state, hot_xy_m=xy, hot_s=ts, goal_xy_m=goals, pending=True)
 
@@ -602,6 +608,14 @@ def tactics_step(
         near[fr[close]] = True
     if obs.air_c is not None or near.any():
         air = None if obs.air_c is None else np.asarray(obs.air_c, dtype=float)
+        if air is not None and t >= state.next_nav_s - _EPS_S:
+            # the probe lags the air: its reading and its rise (at the navigation's
+            # period: never a quiet tick, ``_quiet``)
+            air, prev_c, prev_s = probe_estimate(
+                air, state.air_prev_c, state.air_prev_s, t, params.probe_lag_s
+            )
+            if prev_s != state.air_prev_s:
+                state = replace(state, air_prev_c=prev_c, air_prev_s=prev_s)
         state = _too_hot(state, pose, air, working, params, near, t)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(

@@ -87,6 +87,9 @@ class TacticsState:
     fire_seen_s : ndarray, shape (Hc, Wc) or (0, 0)
         When a thermal camera last had each coarse cell in view [s] (the fire's
         frontier, :mod:`._scout`; (0, 0): none yet).
+    air_prev_c : ndarray, shape (N,) or (0,)
+        The probes' readings the air's slope is taken from [C], and ``air_prev_s``
+        their time [s] (:func:`._hot.probe_estimate`).
     """
 
     coarse: CoarseMap
@@ -118,6 +121,8 @@ class TacticsState:
     t_s: float
     hot_s: FloatArray = field(default_factory=lambda: np.zeros(0))
     fire_seen_s: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
+    air_prev_c: FloatArray = field(default_factory=lambda: np.zeros(0))
+    air_prev_s: float = -np.inf
 
     @property
     def covered(self) -> BoolArray:
