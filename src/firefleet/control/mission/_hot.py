@@ -18,8 +18,9 @@ from __future__ import annotations
 import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
+from firefleet.control.mission._coverage import CoarseMap
 
-__all__ = ["live_hot", "mark_hot", "probe_estimate"]
+__all__ = ["live_hot", "mark_hot", "probe_estimate", "retreat_point"]
 
 
 def mark_hot(
@@ -151,3 +152,42 @@ def probe_estimate(
     if dt >= window_s:
         return est, air.copy(), float(t_s)
     return est, prev, prev_s
+
+
+def retreat_point(
+    cm: CoarseMap, xy_m: FloatArray, away_xy_m: FloatArray, clear_m: float, limit_m: float = 8.0
+) -> FloatArray:
+    """The nearest place by travel from ``xy_m`` (2,) [m] at least ``clear_m`` from
+    every point of ``away_xy_m`` (K, 2) [m] (hot places, flames): where a robot in hot
+    air backs out to (a fighter told only to leave its slot stood 8 s in a door held by
+    the flame guard, its reading rising 55 -> 177 C: mission-office seed 0). NaN when
+    none lies within ``limit_m``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.mission._coverage import coarse_map
+    >>> from firefleet.control.navigation import build_costmap
+    >>> from firefleet.world import OccupancyGrid
+    >>> walls = np.zeros((20, 40), dtype=bool)
+    >>> cm = coarse_map(build_costmap(OccupancyGrid(walls, ~walls, resolution_m=0.25), 0.1), 0.25)
+    >>> hot = np.array([[5.0, 2.5], [6.0, 2.5]])
+    >>> p = retreat_point(cm, np.array([5.0, 2.5]), hot, 1.5)
+    >>> bool(np.hypot(*(p - [5.0, 2.5])) < 1.8), bool(np.hypot(*(hot - p).T).min() >= 1.5)
+    (True, True)
+    """
+    node = cm.node_of(np.asarray(xy_m, dtype=float).reshape(1, 2))
+    travel = cm.distances(node, limit_m)[0].reshape(cm.shape)
+    cells = np.argwhere(np.isfinite(travel) & cm.standable)
+    if len(cells) == 0:
+        return np.full(2, np.nan)
+    xy = cm.goal_xy(cells)
+    away = np.asarray(away_xy_m, dtype=float).reshape(-1, 2)
+    if len(away):
+        d = np.hypot(xy[:, None, 0] - away[None, :, 0], xy[:, None, 1] - away[None, :, 1])
+        ok = d.min(axis=1) >= clear_m
+        cells, xy = cells[ok], xy[ok]
+    if len(cells) == 0:
+        return np.full(2, np.nan)
+    out: FloatArray = xy[int(np.argmin(travel[cells[:, 0], cells[:, 1]]))]
+    return out

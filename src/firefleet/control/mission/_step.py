@@ -20,7 +20,7 @@ from firefleet.control.mission._fight import (
     fire_costmap,
     flame_guard,
 )
-from firefleet.control.mission._hot import live_hot, mark_hot, probe_estimate
+from firefleet.control.mission._hot import live_hot, mark_hot, probe_estimate, retreat_point
 from firefleet.control.mission._knowledge import fires_of, update_knowledge
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -444,15 +444,28 @@ def _too_hot(
     xy, ts, added = mark_hot(state.hot_xy_m, state.hot_s, pose[hot, :2], t_s)
     # a fighter in hot air leaves a slot within standoff_m of a hot place, also one
     # known before (it came back once the place was forgotten), or the place where it
-    # stopped short of its slot (mission-office seed 4: 20 s in a door's gas at 163 C)
+    # stopped short of its slot (mission-office seed 4: 20 s in a door's gas at 163 C; seed
+    # 0: held 14 s in a door by the flame guard, its reading rising 70 -> 144 C)
     goals = state.goal_xy_m.copy()
     live = live_hot(xy, ts, t_s, params.hot_forget_s)
     gap = np.hypot(goals[:, None, 0] - live[None, :, 0], goals[:, None, 1] - live[None, :, 1])
-    settled = np.array([st == "arrived" for st in state.nav.status])  # held up there
+    settled = np.array([st == "arrived" for st in state.nav.status])
+    settled |= state.orders.v_m_s <= 0.0  # held up there (settled, or by the flame guard)
     leave = hot & (state.mode == FIGHT) & (np.any(gap < params.standoff_m, axis=1) | settled)
     if not (added or leave.any()):
         return replace(state, hot_xy_m=xy, hot_s=ts)
     goals[leave] = np.nan
+    if leave.any():
+        # it backs out now, clear of the hot places and the flames (its navigation's
+        # goal; the plan gives it a new slot)
+        away = np.vstack([live, dry_flames(state, params)])
+        back = np.where(leave[:, None], np.nan, pose[:, :2])
+        for i in map(int, np.flatnonzero(leave)):
+            back[i] = retreat_point(state.coarse, pose[i, :2], away, params.standoff_m)
+        go = leave & np.isfinite(back[:, 0])
+        if go.any():
+            nav = navigation_retarget(state.nav, np.where(go[:, None], back, pose[:, :2]), go)
+            state = replace(state, nav=nav)
     return replace(state, hot_xy_m=xy, hot_s=ts, goal_xy_m=goals, pending=True)
 
 
