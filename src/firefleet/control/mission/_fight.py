@@ -10,15 +10,18 @@ import numpy as np
 import scipy.ndimage as ndi
 
 from firefleet._typing import BoolArray, FloatArray, IntArray
+from firefleet.control.mission._coverage import CoarseMap
+from firefleet.control.mission._hot import live_hot
 from firefleet.control.mission._knowledge import fires_of
 from firefleet.control.mission._params import TacticsParams
-from firefleet.control.mission._ring import ring_slots
+from firefleet.control.mission._ring import has_shot, ring_slots
+from firefleet.control.mission._scout import scout_goals
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.mission._water import soaked_at
 from firefleet.control.navigation import Costmap
 from firefleet.world import OccupancyGrid
 
-__all__ = ["fight_goals", "fire_costmap", "flame_guard", "shot_limits_m"]
+__all__ = ["dry_flames", "fight_goals", "fire_costmap", "flame_guard", "shot_limits_m"]
 
 
 def _reachable(blocked: BoolArray, grid: OccupancyGrid, xy_m: FloatArray) -> BoolArray:
@@ -34,18 +37,67 @@ def _reachable(blocked: BoolArray, grid: OccupancyGrid, xy_m: FloatArray) -> Boo
     return out
 
 
-def _aim_spots(state: TacticsState, fire: int, params: TacticsParams) -> FloatArray:
+def _aim_spots(state: TacticsState, fire: int, params: TacticsParams) -> tuple[FloatArray, bool]:
     """The spots of a fire its fighters aim at: its flames on cells the team has not
-    soaked (:mod:`._water`) when it has any, else its flames, else all its spots."""
+    soaked (:mod:`._water`) when it has any, else its flames, else all its spots; and
+    whether they are flames not soaked."""
     k = state.knowledge
     mine = k.spot_fire == fire
+    found = False
     if (mine & k.spot_flame).any():
         mine &= k.spot_flame
         dry = mine & ~soaked_at(k.wet_l_m2, state.coarse, k.spot_xy_m, params.soak_l_m2)
         if dry.any():
             mine = dry
+            found = True
     out: FloatArray = k.spot_xy_m[mine]
+    return out, found
+
+
+def _standable(costmap: Costmap, xy_m: FloatArray) -> BoolArray:
+    """Points (M, 2) [m] on the map and open in the costmap."""
+    grid = costmap.grid
+    inside = grid.contains(xy_m)
+    rc = grid.cell_of(xy_m)
+    h, w = grid.shape
+    ok: BoolArray = (
+        inside & ~costmap.blocked[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+    )
+    return ok
+
+
+def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
+    """The believed flames (F, 2) [m] a robot keeps out of: those on cells the team's
+    ledger does not hold soaked, and the soaked ones within ``standoff_m`` of them.
+
+    A soaked flame with no dry one near is out and its gas cools, so a door whose
+    flames the team soaked is the way in to the fire behind it; a soaked cell beside
+    cells still burning lies in their gas (mission-office seeds 0 and 4, with every
+    soaked flame let through: three fighters entered the fire room's door while the
+    flames beside it burned, and were damaged within 2 s of their probes reading 36-80
+    C). The robots' probes and cameras still mark hot places (``_step._too_hot``).
+    """
+    k = state.knowledge
+    fl = k.spot_xy_m[k.spot_flame]
+    wet = soaked_at(k.wet_l_m2, state.coarse, fl, params.soak_l_m2)
+    dry = fl[~wet]
+    if len(dry) and wet.any():
+        d = np.hypot(fl[:, None, 0] - dry[None, :, 0], fl[:, None, 1] - dry[None, :, 1])
+        wet &= d.min(axis=1) > params.standoff_m
+    out: FloatArray = fl[~wet]
     return out
+
+
+def _near_mask(cm: CoarseMap, xy_m: FloatArray, radius_m: float) -> BoolArray:
+    """Coarse cells within ``radius_m`` of any point (K, 2) [m] (Hc, Wc)."""
+    out = np.zeros(cm.shape, dtype=bool)
+    pts = np.asarray(xy_m, dtype=float).reshape(-1, 2)
+    if len(pts) == 0:
+        return out
+    rc = cm.cell_of(pts)
+    out[rc[:, 0], rc[:, 1]] = True
+    near: BoolArray = ndi.distance_transform_edt(~out) * cm.cell_m <= radius_m
+    return near
 
 
 def shot_limits_m(params: TacticsParams) -> tuple[float, float]:
@@ -81,7 +133,8 @@ def fight_goals(
             # (except round the robots: one near a fire can always leave)
             blocked = np.array(state.nav.costmap.blocked)
             if params.fire_block_m > 0.0:
-                spots = state.knowledge.spot_xy_m
+                # the flames not soaked (a soaked door is a way in: :func:`dry_flames`)
+                spots = dry_flames(state, params)
                 grid = state.nav.costmap.grid
                 blocked |= _disc_mask(grid, spots, params.fire_block_m) & ~_disc_mask(
                     grid, pose[:, :2], 1.0
@@ -90,24 +143,73 @@ def fight_goals(
         # the ring about the spots aimed at (the flames; not the hot gas, which a fire
         # pushes metres out of its room: mission-office seed 1, a ring about the gas in
         # the corridor put a fighter in the next room, without a shot, for 50 s)
-        aim = _aim_spots(state, fid, params)
-        centre = aim.mean(axis=0)
-        radius = float(np.hypot(*(aim - centre).T).max()) + params.standoff_m
-        goals[team] = ring_slots(
-            state.coarse,
-            state.nav.costmap,
-            centre,
-            radius,
-            pose[team, :2],
-            spots_xy_m=aim,
-            reachable=reach,
-            near_m=near_m,
-            shot_m=shot_m,
-            gap_m=gap,
-            avoid_xy_m=state.hot_xy_m,
-            avoid_m=params.standoff_m,
-            clear_xy_m=state.knowledge.spot_xy_m[state.knowledge.spot_flame],
-        )
+        aim, dry = _aim_spots(state, fid, params)
+        avoid = live_hot(state.hot_xy_m, state.hot_s, state.t_s, params.hot_forget_s)
+        if dry:
+            centre = aim.mean(axis=0)
+            radius = float(np.hypot(*(aim - centre).T).max()) + params.standoff_m
+            goals[team] = ring_slots(
+                state.coarse,
+                state.nav.costmap,
+                centre,
+                radius,
+                pose[team, :2],
+                spots_xy_m=aim,
+                reachable=reach,
+                near_m=near_m,
+                shot_m=shot_m,
+                gap_m=gap,
+                avoid_xy_m=avoid,
+                avoid_m=params.standoff_m,
+                clear_xy_m=state.knowledge.spot_xy_m[state.knowledge.spot_flame],
+            )
+            # a slot left in a wall or without a shot (none was found): look instead
+            slots = goals[team]
+            lost = ~_standable(state.nav.costmap, slots) | ~has_shot(
+                state.coarse, slots, aim, near_m, shot_m
+            )
+        else:
+            lost = np.ones(len(team), dtype=bool)  # every flame believed soaked: look
+        if lost.any():
+            cm = state.coarse
+            mine = state.knowledge.spot_xy_m[state.knowledge.spot_fire == fid]
+            keep_off = _near_mask(cm, dry_flames(state, params), params.scout_near_m)
+            keep_off |= _near_mask(cm, avoid, params.standoff_m)
+            look = scout_goals(
+                cm,
+                state.fire_seen_s,
+                state.t_s,
+                mine,
+                pose[team[lost], :2],
+                keep_off,
+                params.scout_m,
+                params.scout_stale_s,
+                params.scout_near_m,
+                params.scout_far_m,
+            )
+            ok = np.isfinite(look[:, 0])
+            idx = team[lost]
+            goals[idx[ok]] = look[ok]
+            if not dry:
+                # nothing left to look at: the ring about the (soaked) flames, as before
+                rest = idx[~ok]
+                if len(rest):
+                    centre = aim.mean(axis=0)
+                    radius = float(np.hypot(*(aim - centre).T).max()) + params.standoff_m
+                    goals[rest] = ring_slots(
+                        state.coarse,
+                        state.nav.costmap,
+                        centre,
+                        radius,
+                        pose[rest, :2],
+                        spots_xy_m=aim,
+                        reachable=reach,
+                        near_m=near_m,
+                        shot_m=shot_m,
+                        gap_m=gap,
+                        avoid_xy_m=avoid,
+                        avoid_m=params.standoff_m,
+                    )
 
 
 def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArray:

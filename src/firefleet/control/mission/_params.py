@@ -176,7 +176,23 @@ class TacticsParams:
         A viewpoint lies this much farther from the walls than the navigation's
         ``robot_radius_m + margin_m``, where the place is wide enough (in a narrower one,
         its middle) [m].
-
+    hot_forget_s : float
+        Slots keep ``standoff_m`` from a hot place for this long after a robot last
+        found it hot [s] (:mod:`._hot`: the gas by a door cools once its flames are
+        soaked; a place kept for good barred the fighters from the fire).
+    scout_m : float
+        A fighter with no flame to aim at, or no slot with a shot, looks at the floor
+        within this distance of its fire's spots, through open floor [m] (:mod:`._scout`).
+    scout_stale_s : float
+        ... that no camera has had in view for this long [s].
+    scout_view_m : float
+        How far a camera's look counts as seeing the floor for the fire [m].
+    scout_near_m, scout_far_m : float
+        A scout stands this near to this far from the floor it looks at [m].
+    probe_lag_s : float
+        The air probe's time constant [s] (the kind's default PT100: 10 s): a robot
+        retreats when its reading plus this times the reading's rise per second
+        reaches ``retreat_c`` (:func:`._hot.probe_estimate`).
     """
 
     standoff_m: float = 1.5
@@ -236,6 +252,14 @@ class TacticsParams:
     view_min_m2: float = 0.125
     view_max_candidates: int = 12000
     view_clear_m: float = 0.2
+    # fight
+    hot_forget_s: float = 30.0
+    scout_m: float = 3.0
+    scout_stale_s: float = 30.0
+    scout_view_m: float = 5.0
+    scout_near_m: float = 1.5
+    scout_far_m: float = 3.0
+    probe_lag_s: float = 10.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -272,6 +296,12 @@ class TacticsParams:
                 "stall_s",
                 "face_gain",
                 "view_min_m2",
+                "hot_forget_s",
+                "scout_m",
+                "scout_stale_s",
+                "scout_view_m",
+                "scout_near_m",
+                "scout_far_m",
             ),
             non_negative=(
                 "view_clear_m",
@@ -288,6 +318,7 @@ class TacticsParams:
                 "fire_cost",
                 "fire_block_m",
                 "flame_guard_m",
+                "probe_lag_s",
             ),
         )
         # people

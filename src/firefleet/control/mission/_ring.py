@@ -22,6 +22,7 @@ Quarterly 2, 1955.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -147,6 +148,54 @@ def _valid(
     return out
 
 
+def _fix(
+    slots: FloatArray,
+    bad: BoolArray,
+    c: FloatArray,
+    radius_m: float,
+    lo_m: float,
+    valid: Callable[[FloatArray], BoolArray],
+    cm: CoarseMap,
+    spots: FloatArray,
+    near_m: float,
+    shot_m: float,
+    gap_m: float,
+) -> None:
+    """Move the invalid slots (``bad``, in place) along their rays to the nearest valid
+    radius, else to the nearest valid coarse cell ``gap_m`` from the other slots."""
+    lo = lo_m
+    radii = np.concatenate(
+        [np.arange(radius_m - 0.1, lo, -0.1), np.arange(radius_m + 0.1, radius_m + 1.5, 0.1)]
+    )
+    radii = radii[np.argsort(np.abs(radii - radius_m), kind="stable")]
+    for i in map(int, np.flatnonzero(bad)):
+        u = (slots[i] - c) / radius_m
+        cand = c + radii[:, None] * u
+        ok = valid(cand)
+        if ok.any():
+            slots[i] = cand[int(np.argmax(ok))]
+            bad[i] = False
+    if bad.any():
+        # off the ring: the nearest cell with a shot, clear of the other slots
+        cells = np.argwhere(cm.standable)
+        xy = cm.goal_xy(cells)
+        ds = np.hypot(xy[:, None, 0] - spots[None, :, 0], xy[:, None, 1] - spots[None, :, 1])
+        xy = xy[np.any((ds >= near_m) & (ds <= shot_m), axis=1)]
+        xy = xy[valid(xy)]
+        for i in map(int, np.flatnonzero(bad)):
+            others = slots[~bad]
+            if len(others):
+                gap = np.hypot(
+                    xy[:, None, 0] - others[None, :, 0], xy[:, None, 1] - others[None, :, 1]
+                )
+                cand = xy[gap.min(axis=1) >= gap_m]
+            else:
+                cand = xy
+            if len(cand):
+                slots[i] = cand[int(np.argmin(np.hypot(*(cand - slots[i]).T)))]
+                bad[i] = False
+
+
 def ring_slots(
     cm: CoarseMap,
     costmap: Costmap,
@@ -232,37 +281,28 @@ def ring_slots(
             best, best_score = pts, score
     slots = best.copy()
     bad = ~valid(slots)
-    lo = costmap.inflation_m + 0.2
-    radii = np.concatenate(
-        [np.arange(radius_m - 0.1, lo, -0.1), np.arange(radius_m + 0.1, radius_m + 1.5, 0.1)]
+    _fix(
+        slots, bad, c, radius_m, costmap.inflation_m + 0.2, valid, cm, spots, near_m, shot_m, gap_m
     )
-    radii = radii[np.argsort(np.abs(radii - radius_m), kind="stable")]
-    for i in map(int, np.flatnonzero(bad)):
-        u = (slots[i] - c) / radius_m
-        cand = c + radii[:, None] * u
-        ok = valid(cand)
-        if ok.any():
-            slots[i] = cand[int(np.argmax(ok))]
-            bad[i] = False
-    if bad.any():
-        # off the ring: the nearest cell with a shot, clear of the other slots
-        cells = np.argwhere(cm.standable)
-        xy = cm.goal_xy(cells)
-        ds = np.hypot(xy[:, None, 0] - spots[None, :, 0], xy[:, None, 1] - spots[None, :, 1])
-        xy = xy[np.any((ds >= near_m) & (ds <= shot_m), axis=1)]
-        xy = xy[valid(xy)]
-        for i in map(int, np.flatnonzero(bad)):
-            others = slots[~bad]
-            if len(others):
-                gap = np.hypot(
-                    xy[:, None, 0] - others[None, :, 0], xy[:, None, 1] - others[None, :, 1]
-                )
-                cand = xy[gap.min(axis=1) >= gap_m]
-            else:
-                cand = xy
-            if len(cand):
-                slots[i] = cand[int(np.argmin(np.hypot(*(cand - slots[i]).T)))]
-                bad[i] = False
+    if bad.any() and len(avoid):
+        # no slot with a shot clear of the hot places: one nearer them (a hot place is
+        # where the air was hot once; the fire's cells burn on behind it)
+        def valid_near_hot(pts: FloatArray) -> BoolArray:
+            return _valid(cm, costmap, reach, spots, near_m, shot_m, pts, avoid[:0], 0.0, clear)
+
+        _fix(
+            slots,
+            bad,
+            c,
+            radius_m,
+            costmap.inflation_m + 0.2,
+            valid_near_hot,
+            cm,
+            spots,
+            near_m,
+            shot_m,
+            gap_m,
+        )
     cost = np.hypot(robots[:, None, 0] - slots[None, :, 0], robots[:, None, 1] - slots[None, :, 1])
     pick = allocate_tasks(cost)
     out: FloatArray = slots[pick]

@@ -15,7 +15,13 @@ from firefleet.control.mission._coverage import (
     viewpoints,
 )
 from firefleet.control.mission._explore import explore_views, scan_turn
-from firefleet.control.mission._fight import fight_goals, fire_costmap, flame_guard
+from firefleet.control.mission._fight import (
+    dry_flames,
+    fight_goals,
+    fire_costmap,
+    flame_guard,
+)
+from firefleet.control.mission._hot import live_hot, mark_hot, probe_estimate, retreat_point
 from firefleet.control.mission._knowledge import fires_of, update_knowledge, watch_victims
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -37,6 +43,7 @@ from firefleet.control.mission._plan import (
 )
 from firefleet.control.mission._quiet import EPS_S as _EPS_S
 from firefleet.control.mission._quiet import is_quiet, tank_flags
+from firefleet.control.mission._scout import seen_update
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.mission._water import (
     add_water,
@@ -346,7 +353,8 @@ def _orders(
     stop = (mode == DAMAGED) | refilling | (mode == IDLE)
     v[stop] = 0.0
     w[stop] = 0.0
-    if params.flame_guard_m > 0.0 and k.spot_flame.any():
+    flames = dry_flames(state, params)  # soaked: the way in once the door's flames are out
+    if params.flame_guard_m > 0.0 and len(flames):
         # every robot but a refiller stops short of flames (a refiller leaves: on
         # mission-office seed 1 two were held in the fire's room by the flames at its door)
         who = mode != REFILL
@@ -355,7 +363,7 @@ def _orders(
                 v[who],
                 w[who],
                 pose[who],
-                k.spot_xy_m[k.spot_flame],
+                flames,
                 params.flame_guard_m,
                 math.radians(60.0),
                 w_max,
@@ -426,29 +434,44 @@ def _too_hot(
     working: BoolArray,
     params: TacticsParams,
     near: BoolArray | None = None,
+    t_s: float = 0.0,
 ) -> TacticsState:
     """A robot in air of ``retreat_c`` or more, or seeing flames nearer than
     ``flame_guard_m`` (``near``: its probe lags the air by seconds, its camera does
-    not), marks its place hot (once per half metre); a fighter there gets a new slot at
-    the next plan."""
+    not), marks its place hot at ``t_s`` (once per half metre: a place marked again
+    is refreshed, :func:`._hot.mark_hot`); a fighter there gets a new slot at the next
+    plan."""
     hot = working & (air_c >= params.retreat_c) if air_c is not None else np.zeros_like(working)
     if near is not None:
         hot |= working & near
     if not hot.any():
         return state
-    known = state.hot_xy_m
-    new: list[FloatArray] = []
-    for i in map(int, np.flatnonzero(hot)):
-        pts = np.vstack([known, *new]) if new else known
-        if len(pts) == 0 or np.hypot(*(pts - pose[i, :2]).T).min() > 0.5:
-            new.append(pose[i : i + 1, :2].copy())
-    if not new:
-        return state
-    fresh = np.vstack(new)
+    xy, ts, added = mark_hot(state.hot_xy_m, state.hot_s, pose[hot, :2], t_s)
+    # a fighter in hot air leaves a slot within standoff_m of a hot place, also one
+    # known before (it came back once the place was forgotten), or the place where it
+    # stopped short of its slot (mission-office seed 4: 20 s in a door's gas at 163 C; seed
+    # 0: held 14 s in a door by the flame guard, its reading rising 70 -> 144 C)
     goals = state.goal_xy_m.copy()
-    leave = hot & (state.mode == FIGHT)
+    live = live_hot(xy, ts, t_s, params.hot_forget_s)
+    gap = np.hypot(goals[:, None, 0] - live[None, :, 0], goals[:, None, 1] - live[None, :, 1])
+    settled = np.array([st == "arrived" for st in state.nav.status])
+    settled |= state.orders.v_m_s <= 0.0  # held up there (settled, or by the flame guard)
+    leave = hot & (state.mode == FIGHT) & (np.any(gap < params.standoff_m, axis=1) | settled)
+    if not (added or leave.any()):
+        return replace(state, hot_xy_m=xy, hot_s=ts)
     goals[leave] = np.nan
-    return replace(state, hot_xy_m=np.vstack([known, fresh]), goal_xy_m=goals, pending=True)
+    if leave.any():
+        # it backs out now, clear of the hot places and the flames (its navigation's
+        # goal; the plan gives it a new slot)
+        away = np.vstack([live, dry_flames(state, params)])
+        back = np.where(leave[:, None], np.nan, pose[:, :2])
+        for i in map(int, np.flatnonzero(leave)):
+            back[i] = retreat_point(state.coarse, pose[i, :2], away, params.standoff_m)
+        go = leave & np.isfinite(back[:, 0])
+        if go.any():
+            nav = navigation_retarget(state.nav, np.where(go[:, None], back, pose[:, :2]), go)
+            state = replace(state, nav=nav)
+    return replace(state, hot_xy_m=xy, hot_s=ts, goal_xy_m=goals, pending=True)
 
 
 def _dropped(state: TacticsState, pose: FloatArray, lost: BoolArray) -> TacticsState:
@@ -606,7 +629,15 @@ def tactics_step(
         near[fr[close]] = True
     if obs.air_c is not None or near.any():
         air = None if obs.air_c is None else np.asarray(obs.air_c, dtype=float)
-        state = _too_hot(state, pose, air, working, params, near)
+        if air is not None and t >= state.next_nav_s - _EPS_S:
+            # the probe lags the air: its reading and its rise (at the navigation's
+            # period: never a quiet tick, ``_quiet``)
+            air, prev_c, prev_s = probe_estimate(
+                air, state.air_prev_c, state.air_prev_s, t, params.probe_lag_s
+            )
+            if prev_s != state.air_prev_s:
+                state = replace(state, air_prev_c=prev_c, air_prev_s=prev_s)
+        state = _too_hot(state, pose, air, working, params, near, t)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(
             state.coarse,
@@ -618,9 +649,13 @@ def tactics_step(
         )
         covered = state.covered_coarse.copy()
         covered[rows, cols] = True
+        seen = seen_update(
+            state.fire_seen_s, state.coarse, pose[working], t, params.scout_view_m, params.hfov_rad
+        )
         state = replace(
             state,
             covered_coarse=covered,
+            fire_seen_s=seen,
             next_coverage_s=_next(state.next_coverage_s, params.coverage_period_s, t),
         )
     if t >= state.next_nav_s - _EPS_S:

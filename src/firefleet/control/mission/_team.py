@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -81,6 +81,15 @@ class TacticsState:
     t_s : float
         Time of the last step that changed anything [s] (a quiet tick returns the state
         as it was).
+    hot_s : ndarray, shape (K,)
+        When each of ``hot_xy_m`` was last marked [s] (slots keep from a hot place
+        only for ``hot_forget_s`` after; empty: none marked yet).
+    fire_seen_s : ndarray, shape (Hc, Wc) or (0, 0)
+        When a thermal camera last had each coarse cell in view [s] (the fire's
+        frontier, :mod:`._scout`; (0, 0): none yet).
+    air_prev_c : ndarray, shape (N,) or (0,)
+        The probes' readings the air's slope is taken from [C], and ``air_prev_s``
+        their time [s] (:func:`._hot.probe_estimate`).
     """
 
     coarse: CoarseMap
@@ -110,6 +119,10 @@ class TacticsState:
     memo: dict[int, FloatArray]
     base_costmap: Costmap
     t_s: float
+    hot_s: FloatArray = field(default_factory=lambda: np.zeros(0))
+    fire_seen_s: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
+    air_prev_c: FloatArray = field(default_factory=lambda: np.zeros(0))
+    air_prev_s: float = -np.inf
 
     @property
     def covered(self) -> BoolArray:
