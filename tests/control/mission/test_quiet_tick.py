@@ -116,7 +116,7 @@ def test_quiet_exactly_when_the_full_step_changes_nothing(
 
 def test_compiled_robot_tests_equal_the_array_form() -> None:
     """``robots_quiet`` against the full step's array expressions (lost robots, looks at
-    a known fire, ``tank_flags``, ``_too_hot``) on random teams."""
+    a known fire, ``tank_flags``, ``_upkeep.too_hot``) on random teams."""
     from firefleet.control.mission._params import EXPLORE, IDLE, REFILL
     from firefleet.control.mission._plan import _empty_l
 

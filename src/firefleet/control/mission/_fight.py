@@ -75,7 +75,7 @@ def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
     cells still burning lies in their gas (mission-office seeds 0 and 4, with every
     soaked flame let through: three fighters entered the fire room's door while the
     flames beside it burned, and were damaged within 2 s of their probes reading 36-80
-    C). The robots' probes and cameras still mark hot places (``_step._too_hot``).
+    C). The robots' probes and cameras still mark hot places (``_upkeep.too_hot``).
     """
     k = state.knowledge
     fl = k.spot_xy_m[k.spot_flame]

@@ -21,7 +21,7 @@ from firefleet.control.mission._fight import (
     fire_costmap,
     flame_guard,
 )
-from firefleet.control.mission._hot import live_hot, mark_hot, probe_estimate, retreat_point
+from firefleet.control.mission._hot import probe_estimate
 from firefleet.control.mission._knowledge import fires_of, update_knowledge, watch_victims
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -42,9 +42,10 @@ from firefleet.control.mission._plan import (
     task_distances,
 )
 from firefleet.control.mission._quiet import EPS_S as _EPS_S
-from firefleet.control.mission._quiet import is_quiet, tank_flags
+from firefleet.control.mission._quiet import is_quiet
 from firefleet.control.mission._scout import seen_update
 from firefleet.control.mission._team import TacticsState
+from firefleet.control.mission._upkeep import dropped, retarget, tank_changes, too_hot, watchdog
 from firefleet.control.mission._water import (
     add_water,
     cone_cells,
@@ -60,9 +61,6 @@ from firefleet.errors import InputError, as_float_array
 
 __all__ = ["tactics_step"]
 
-_MOVE_M = 0.25
-"""A new goal this close to the old one does not re-plan the robot's path [m]."""
-
 
 def _next(due_s: float, period_s: float, t_s: float) -> float:
     """The next due time after ``t_s``: on the period's grid, or a period from now when
@@ -74,26 +72,6 @@ def _next(due_s: float, period_s: float, t_s: float) -> float:
 def _wrap(a: FloatArray) -> FloatArray:
     out: FloatArray = (a + np.pi) % (2.0 * np.pi) - np.pi
     return out
-
-
-def _retarget(state: TacticsState, goals: FloatArray, pose: FloatArray) -> TacticsState:
-    """New goals into the navigation (NaN: stay where it is) for robots whose goal moved."""
-    old = state.goal_xy_m
-    fin = np.isfinite(goals[:, 0])
-    moved = np.where(
-        fin & np.isfinite(old[:, 0]),
-        np.hypot(goals[:, 0] - old[:, 0], goals[:, 1] - old[:, 1]) > _MOVE_M,
-        fin != np.isfinite(old[:, 0]),
-    )
-    if not moved.any():
-        return replace(state, goal_xy_m=goals)
-    nav_goal = np.where(fin[:, None], goals, pose[:, :2])
-    nav = navigation_retarget(state.nav, nav_goal, moved)
-    closest = state.closest_m.copy()
-    closest[moved] = np.inf
-    since = state.closest_s.copy()
-    since[moved] = max(state.t_s, 0.0)
-    return replace(state, nav=nav, goal_xy_m=goals, closest_m=closest, closest_s=since)
 
 
 def _near_fire(cm: CoarseMap, spots_xy_m: FloatArray, radius_m: float) -> BoolArray:
@@ -208,7 +186,7 @@ def _plan(
         pending=False,
         messages_sent=state.messages_sent + int(working.sum()),
     )
-    return _retarget(new, goals, pose)
+    return retarget(new, goals, pose)
 
 
 def _orders(
@@ -387,149 +365,6 @@ def _orders(
     )
 
 
-def _tank_changes(
-    state: TacticsState,
-    pose: FloatArray,
-    tank: FloatArray,
-    working: BoolArray,
-    params: TacticsParams,
-) -> TacticsState:
-    """Empty tanks go to refill at once; full ones come back (an allocation follows)."""
-    empty, full = tank_flags(state, tank, working, params)
-    if not (empty.any() or full.any()):
-        return state
-    mode = state.mode.copy()
-    spot = state.refill_spot.copy()
-    goals = state.goal_xy_m.copy()
-    task_fire = state.task_fire.copy()
-    task_victim = state.task_victim.copy()
-    spots = state.refill_spots_m
-    for i in map(int, np.flatnonzero(empty)):
-        used = np.bincount(spot[spot >= 0], minlength=len(spots))
-        # the free spot nearest the point (spots come nearest first): one farther out,
-        # nearer the robot, leaves it refilling up to 2 refill_radius_m from the point
-        spot[i] = int(np.lexsort((np.arange(len(spots)), used))[0])
-        goals[i] = spots[spot[i]]
-        mode[i] = REFILL
-        task_fire[i] = -1
-        task_victim[i] = -1
-    spot[full] = -1
-    goals[full] = np.nan
-    mode[full] = IDLE
-    new = replace(
-        state,
-        mode=mode,
-        refill_spot=spot,
-        task_fire=task_fire,
-        task_victim=task_victim,
-        pending=True,
-    )
-    return _retarget(new, goals, pose)
-
-
-def _too_hot(
-    state: TacticsState,
-    pose: FloatArray,
-    air_c: FloatArray | None,
-    working: BoolArray,
-    params: TacticsParams,
-    near: BoolArray | None = None,
-    t_s: float = 0.0,
-) -> TacticsState:
-    """A robot in air of ``retreat_c`` or more, or seeing flames nearer than
-    ``flame_guard_m`` (``near``: its probe lags the air by seconds, its camera does
-    not), marks its place hot at ``t_s`` (once per half metre: a place marked again
-    is refreshed, :func:`._hot.mark_hot`); a fighter there gets a new slot at the next
-    plan."""
-    hot = working & (air_c >= params.retreat_c) if air_c is not None else np.zeros_like(working)
-    if near is not None:
-        hot |= working & near
-    if not hot.any():
-        return state
-    xy, ts, added = mark_hot(state.hot_xy_m, state.hot_s, pose[hot, :2], t_s)
-    # a fighter in hot air leaves a slot within standoff_m of a hot place, also one
-    # known before (it came back once the place was forgotten), or the place where it
-    # stopped short of its slot (mission-office seed 4: 20 s in a door's gas at 163 C; seed
-    # 0: held 14 s in a door by the flame guard, its reading rising 70 -> 144 C)
-    goals = state.goal_xy_m.copy()
-    live = live_hot(xy, ts, t_s, params.hot_forget_s)
-    gap = np.hypot(goals[:, None, 0] - live[None, :, 0], goals[:, None, 1] - live[None, :, 1])
-    settled = np.array([st == "arrived" for st in state.nav.status])
-    settled |= state.orders.v_m_s <= 0.0  # held up there (settled, or by the flame guard)
-    leave = hot & (state.mode == FIGHT) & (np.any(gap < params.standoff_m, axis=1) | settled)
-    if not (added or leave.any()):
-        return replace(state, hot_xy_m=xy, hot_s=ts)
-    goals[leave] = np.nan
-    if leave.any():
-        # it backs out now, clear of the hot places and the flames (its navigation's
-        # goal; the plan gives it a new slot)
-        away = np.vstack([live, dry_flames(state, params)])
-        back = np.where(leave[:, None], np.nan, pose[:, :2])
-        for i in map(int, np.flatnonzero(leave)):
-            back[i] = retreat_point(state.coarse, pose[i, :2], away, params.standoff_m)
-        go = leave & np.isfinite(back[:, 0])
-        if go.any():
-            nav = navigation_retarget(state.nav, np.where(go[:, None], back, pose[:, :2]), go)
-            state = replace(state, nav=nav)
-    return replace(state, hot_xy_m=xy, hot_s=ts, goal_xy_m=goals, pending=True)
-
-
-def _dropped(state: TacticsState, pose: FloatArray, lost: BoolArray) -> TacticsState:
-    """Damaged or dead robots stop for good and leave their tasks (an allocation follows)."""
-    mode = state.mode.copy()
-    mode[lost] = DAMAGED
-    tf = state.task_fire.copy()
-    tv = state.task_victim.copy()
-    tf[lost] = -1
-    tv[lost] = -1
-    goals = state.goal_xy_m.copy()
-    goals[lost] = np.nan
-    spot = state.refill_spot.copy()
-    spot[lost] = -1
-    new = replace(
-        state,
-        mode=mode,
-        task_fire=tf,
-        task_victim=tv,
-        refill_spot=spot,
-        known_damaged=state.known_damaged | lost,
-        pending=True,
-    )
-    new = _retarget(new, goals, pose)
-    nav = navigation_retarget(new.nav, pose[:, :2], lost)  # arrived at once: no one waits for it
-    return replace(new, nav=nav)
-
-
-def _watchdog(
-    state: TacticsState, pose: FloatArray, t: float, params: TacticsParams
-) -> TacticsState:
-    """Explorers that neither reach their goal nor come 0.2 m closer to it in
-    ``stall_s`` (one arrived there: and a whole turn more) give their viewpoint up (or
-    stand within the goal tolerance of it without navigation calling it reached); the
-    team re-plans."""
-    goal = state.goal_xy_m
-    d = np.hypot(pose[:, 0] - goal[:, 0], pose[:, 1] - goal[:, 1])
-    better = np.isfinite(d) & (d < state.closest_m - 0.2)
-    closest = np.where(better, d, state.closest_m)
-    since = np.where(better, t, state.closest_s)
-    explorers = state.mode == EXPLORE
-    turn_s = 2.0 * math.pi / params.scan_omega_rad_s
-    there = np.array([s == "arrived" for s in state.nav.status])
-    stalled = explorers & np.isfinite(d) & (t - since >= params.stall_s + there * turn_s)
-    near = explorers & (d <= params.nav.goal_tolerance_m)
-    if not (stalled.any() or near.any()):
-        return replace(state, closest_m=closest, closest_s=since)
-    excluded = state.excluded
-    if stalled.any():
-        excluded = excluded.copy()
-        for i in map(int, np.flatnonzero(stalled)):
-            for rc in (state.explore_cell[i], state.coarse.cell_of(goal[i])):
-                if rc[0] >= 0:
-                    excluded[rc[0], rc[1]] = True
-        since = np.where(stalled, t, since)
-    return replace(state, closest_m=closest, closest_s=since, excluded=excluded, pending=True)
-
-
 def tactics_step(
     state: TacticsState, obs: TacticsObservation, params: TacticsParams, dt_s: float
 ) -> tuple[TacticsState, Orders]:
@@ -592,7 +427,7 @@ def tactics_step(
         raise InputError(f"obs.tank_l, damaged and alive must hold one value per robot ({n})")
     lost = ~working & ~state.known_damaged
     if lost.any():
-        state = _dropped(state, pose, lost)
+        state = dropped(state, pose, lost)
     looked = working if obs.looked is None else working & np.asarray(obs.looked, dtype=bool)
     fire_xy = np.asarray(obs.fire_xy_m, dtype=float).reshape(-1, 2)
     person_xy = np.asarray(obs.person_xy_m, dtype=float).reshape(-1, 2)
@@ -616,7 +451,7 @@ def tactics_step(
             pending=state.pending or changed,
             messages_sent=state.messages_sent + len(fire_xy) + len(person_xy),
         )
-    state = _tank_changes(state, pose, tank, working, params)
+    state = tank_changes(state, pose, tank, working, params)
     near = np.zeros(n, dtype=bool)
     if len(fire_xy) and params.flame_guard_m > 0.0:
         fr = np.asarray(obs.fire_robot, dtype=np.int64)
@@ -637,7 +472,7 @@ def tactics_step(
             )
             if prev_s != state.air_prev_s:
                 state = replace(state, air_prev_c=prev_c, air_prev_s=prev_s)
-        state = _too_hot(state, pose, air, working, params, near, t)
+        state = too_hot(state, pose, air, working, params, near, t)
     if t >= state.next_coverage_s - _EPS_S:
         rows, cols = cone_coverage(
             state.coarse,
@@ -671,7 +506,7 @@ def tactics_step(
             state = replace(state, excluded=excluded, pending=True)
         if any(status[i] == "arrived" for i in explorers):
             state = replace(state, pending=True)
-        state = _watchdog(state, pose, t, params)
+        state = watchdog(state, pose, t, params)
     since = t - state.last_plan_s
     if (state.pending and since >= params.replan_s) or since >= params.explore_replan_s:
         state = _plan(state, pose, tank, working, params)
