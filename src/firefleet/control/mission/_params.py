@@ -139,15 +139,10 @@ class TacticsParams:
         Cell side of the coarse grid on which coverage, frontiers and travel distances
         are computed [m] (a whole number of map cells; at least one).
     travel_limit_m : float
-        Farthest a robot's exploration travel distances are searched [m]; frontiers
-        farther cost their straight-line distance times ``detour_factor``.
-    detour_factor : float
-        Straight-line distance multiplier for frontiers past ``travel_limit_m``.
+        Farthest a robot's exploration travel distances are searched [m].
     probe_m : float
         An explorer looks at the uncovered floor within this distance of its frontier
         cell [m] (:func:`._coverage.viewpoints`).
-    burgard_beta : float
-        Weight of travel cost against utility in Burgard's frontier choice [1/m].
     stall_s : float
         An explorer that comes no closer to its goal in this time gives it up [s].
     scan_omega_rad_s : float
@@ -156,8 +151,6 @@ class TacticsParams:
         Proportional gain turning a robot towards what it faces [1/s].
     keep_bonus_m : float
         Hysteresis: a robot's current task costs it this much less [m].
-    frontier_min_cells : int
-        Smallest frontier kept [coarse cells].
     nav : NavigationParams
         The navigation controller's constants.
     person_wall_m : float
@@ -236,14 +229,11 @@ class TacticsParams:
     nav_period_s: float = 0.1
     plan_cell_m: float = 0.25
     travel_limit_m: float = 15.0
-    detour_factor: float = 1.5
     probe_m: float = 0.75
-    burgard_beta: float = 0.02
     stall_s: float = 10.0
     scan_omega_rad_s: float = 1.0
     face_gain: float = 2.0
     keep_bonus_m: float = 2.0
-    frontier_min_cells: int = 3
     nav: NavigationParams = field(default_factory=NavigationParams)
     # people
     person_wall_m: float = 0.15
@@ -291,7 +281,6 @@ class TacticsParams:
                 "nav_period_s",
                 "plan_cell_m",
                 "travel_limit_m",
-                "detour_factor",
                 "scan_omega_rad_s",
                 "stall_s",
                 "face_gain",
@@ -307,7 +296,6 @@ class TacticsParams:
                 "view_clear_m",
                 "low_tank_frac",
                 "low_tank_penalty_m",
-                "burgard_beta",
                 "keep_bonus_m",
                 "probe_m",
                 "sensing_near_m",
@@ -333,7 +321,6 @@ class TacticsParams:
             "fire_out_looks",
             "victim_out_looks",
             "fire_robots_min",
-            "frontier_min_cells",
             "view_max_candidates",
         ):
             if int(getattr(self, name)) < 1:
