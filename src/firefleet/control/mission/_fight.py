@@ -120,7 +120,6 @@ def fight_goals(
     ids, _, _ = fires_of(state.knowledge)
     reach: BoolArray | None = None
     near_m, shot_m = shot_limits_m(params)
-    gap = 2.0 * params.nav.robot_radius_m + params.nav.margin_m + 0.15
     for fid in ids:
         team = np.flatnonzero(task_fire == fid)
         if len(team) == 0:
@@ -145,24 +144,10 @@ def fight_goals(
         # the corridor put a fighter in the next room, without a shot, for 50 s)
         aim, dry = _aim_spots(state, fid, params)
         avoid = live_hot(state.hot_xy_m, state.hot_s, state.t_s, params.hot_forget_s)
+
         if dry:
-            centre = aim.mean(axis=0)
-            radius = float(np.hypot(*(aim - centre).T).max()) + params.standoff_m
-            goals[team] = ring_slots(
-                state.coarse,
-                state.nav.costmap,
-                centre,
-                radius,
-                pose[team, :2],
-                spots_xy_m=aim,
-                reachable=reach,
-                near_m=near_m,
-                shot_m=shot_m,
-                gap_m=gap,
-                avoid_xy_m=avoid,
-                avoid_m=params.standoff_m,
-                clear_xy_m=state.knowledge.spot_xy_m[state.knowledge.spot_flame],
-            )
+            flames = state.knowledge.spot_xy_m[state.knowledge.spot_flame]
+            goals[team] = _ring(state, pose[team, :2], aim, avoid, reach, params, flames)
             # a slot left in a wall or without a shot (none was found): look instead
             slots = goals[team]
             lost = ~_standable(state.nav.costmap, slots) | ~has_shot(
@@ -194,22 +179,39 @@ def fight_goals(
                 # nothing left to look at: the ring about the (soaked) flames, as before
                 rest = idx[~ok]
                 if len(rest):
-                    centre = aim.mean(axis=0)
-                    radius = float(np.hypot(*(aim - centre).T).max()) + params.standoff_m
-                    goals[rest] = ring_slots(
-                        state.coarse,
-                        state.nav.costmap,
-                        centre,
-                        radius,
-                        pose[rest, :2],
-                        spots_xy_m=aim,
-                        reachable=reach,
-                        near_m=near_m,
-                        shot_m=shot_m,
-                        gap_m=gap,
-                        avoid_xy_m=avoid,
-                        avoid_m=params.standoff_m,
-                    )
+                    goals[rest] = _ring(state, pose[rest, :2], aim, avoid, reach, params)
+
+
+def _ring(
+    state: TacticsState,
+    robots_xy_m: FloatArray,
+    aim: FloatArray,
+    avoid: FloatArray,
+    reach: BoolArray | None,
+    params: TacticsParams,
+    clear_xy_m: FloatArray | None = None,
+) -> FloatArray:
+    """Slots (R, 2) for robots at ``robots_xy_m`` on the ring about the spots aimed at
+    (:func:`._ring.ring_slots`: ``standoff_m`` beyond the spots' extent, clear of the hot
+    places ``avoid`` and of ``clear_xy_m``)."""
+    near_m, shot_m = shot_limits_m(params)
+    centre = aim.mean(axis=0)
+    radius = float(np.hypot(*(aim - centre).T).max()) + params.standoff_m
+    return ring_slots(
+        state.coarse,
+        state.nav.costmap,
+        centre,
+        radius,
+        robots_xy_m,
+        spots_xy_m=aim,
+        reachable=reach,
+        near_m=near_m,
+        shot_m=shot_m,
+        gap_m=2.0 * params.nav.robot_radius_m + params.nav.margin_m + 0.15,
+        avoid_xy_m=avoid,
+        avoid_m=params.standoff_m,
+        clear_xy_m=clear_xy_m,
+    )
 
 
 def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArray:
