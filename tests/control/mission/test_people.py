@@ -17,9 +17,10 @@ from firefleet.control.mission import (
     tactics_init,
     tactics_step,
 )
+from firefleet.control.mission._coverage import clear_sight
 from firefleet.control.mission._knowledge import empty_knowledge, update_knowledge, watch_victims
 from firefleet.control.mission._params import CONFIRM, EXPLORE
-from firefleet.control.mission._people import behind_wall, person_plausible, wall_distance
+from firefleet.control.mission._people import person_plausible, wall_distance
 from firefleet.errors import InputError
 
 P = TacticsParams()
@@ -142,7 +143,7 @@ def test_behind_a_wall_and_bad_input() -> None:
     # from the corridor: the south-middle room's person is behind the wall, not at the door
     a = np.array([[12.5, 4.9], [10.0, 4.9]])
     b = np.array([[12.0, 2.0], [12.0, 2.0]])
-    assert behind_wall(cm, a, b).tolist() == [False, True]
+    assert (~clear_sight(cm, a, b)).tolist() == [False, True]  # a wall between
     assert person_plausible(cm, a, b, P.person_wall_m).tolist() == [True, False]
     assert person_plausible(cm, np.zeros((0, 2)), np.zeros((0, 2)), 0.15).shape == (0,)
     with pytest.raises(InputError, match="robot_xy_m"):

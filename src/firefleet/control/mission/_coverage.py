@@ -306,8 +306,9 @@ def line_of_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
 
 def clear_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
     """Whether no opaque cell lies between each point ``a`` (M, 2) and the point ``b``
-    (2,) [m], the cells of both ends excepted (:func:`line_of_sight` also lets a cell
-    next to either end pass, so a viewpoint beside a wall would see through it).
+    (2,), or its own point of ``b`` (M, 2) [m], the cells of both ends excepted
+    (quarter-cell samples; :func:`line_of_sight` also lets a cell next to either end
+    pass, so a viewpoint beside a wall would see through it).
 
     Examples
     --------
@@ -322,19 +323,21 @@ def clear_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
     [False, False]
     >>> clear_sight(cm, a, np.array([1.0, 1.5])).tolist()
     [True, True]
+    >>> clear_sight(cm, a, np.array([[3.0, 1.0], [1.0, 1.5]])).tolist()  # one b each
+    [False, True]
     """
     a = np.asarray(a_m, dtype=float).reshape(-1, 2)
-    b = np.asarray(b_m, dtype=float).reshape(2)
+    b = np.broadcast_to(np.asarray(b_m, dtype=float), a.shape)
     if len(a) == 0:
         return np.zeros(0, dtype=bool)
-    seg = np.hypot(b[0] - a[:, 0], b[1] - a[:, 1])
+    seg = np.hypot(b[:, 0] - a[:, 0], b[:, 1] - a[:, 1])
     n = max(2, math.ceil(float(seg.max()) / (0.25 * cm.cell_m)) + 1)
     s = np.linspace(0.0, 1.0, n)
     pts = a[:, None] + s[None, :, None] * (b - a)[:, None]
     rc = cm.cell_of(pts)
     own_a = cm.cell_of(a)
-    own_b = cm.cell_of(b[None])[0]
-    ends = np.all(rc == own_a[:, None], axis=-1) | np.all(rc == own_b, axis=-1)
+    own_b = cm.cell_of(b)
+    ends = np.all(rc == own_a[:, None], axis=-1) | np.all(rc == own_b[:, None], axis=-1)
     blocked = cm.opaque[rc[..., 0], rc[..., 1]] & ~ends
     out: BoolArray = ~blocked.any(axis=1)
     return out

@@ -38,11 +38,11 @@ import math
 import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
-from firefleet.control.mission._coverage import CoarseMap
+from firefleet.control.mission._coverage import CoarseMap, clear_sight
 from firefleet.control.mission._params import TacticsParams
 from firefleet.errors import InputError
 
-__all__ = ["behind_wall", "confirm_sight", "person_plausible", "wall_distance"]
+__all__ = ["confirm_sight", "person_plausible", "wall_distance"]
 
 
 def wall_distance(cm: CoarseMap, xy_m: FloatArray, reach_m: float) -> FloatArray:
@@ -81,37 +81,6 @@ def wall_distance(cm: CoarseMap, xy_m: FloatArray, reach_m: float) -> FloatArray
     gy = np.maximum(np.abs(p[:, None, 1] - centre[..., 1]) - half, 0.0)
     d = np.where(opaque, np.hypot(gx, gy), np.inf).min(axis=1)
     out = np.where(d <= reach_m, d, np.inf)
-    return out
-
-
-def behind_wall(cm: CoarseMap, from_m: FloatArray, to_m: FloatArray) -> BoolArray:
-    """Whether an opaque coarse cell lies between each ``from`` point and its ``to``
-    point (K, 2), the cells of both ends excepted (quarter-cell samples).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.world import OccupancyGrid
-    >>> from firefleet.control.navigation import build_costmap
-    >>> from firefleet.control.mission._coverage import coarse_map
-    >>> occ = np.zeros((40, 80), bool); occ[:, 40:45] = True   # a wall x 2.0-2.25 m
-    >>> cm = coarse_map(build_costmap(OccupancyGrid(occ, ~occ, 0.05), 0.2), 0.25)
-    >>> a = np.array([[1.0, 1.0], [1.0, 1.0]])
-    >>> behind_wall(cm, a, np.array([[3.0, 1.0], [1.8, 1.5]])).tolist()
-    [True, False]
-    """
-    a = np.asarray(from_m, dtype=float).reshape(-1, 2)
-    b = np.asarray(to_m, dtype=float).reshape(-1, 2)
-    if len(a) == 0:
-        return np.zeros(0, dtype=bool)
-    seg = np.hypot(*(b - a).T)
-    n = max(2, math.ceil(float(seg.max()) / (0.25 * cm.cell_m)) + 1)
-    s = np.linspace(0.0, 1.0, n)
-    rc = cm.cell_of(a[:, None] + s[None, :, None] * (b - a)[:, None])
-    ends = np.all(rc == cm.cell_of(a)[:, None], axis=-1) | np.all(
-        rc == cm.cell_of(b)[:, None], axis=-1
-    )
-    out: BoolArray = np.any(cm.opaque[rc[..., 0], rc[..., 1]] & ~ends, axis=1)
     return out
 
 
@@ -159,7 +128,7 @@ def person_plausible(
     ok &= wall_distance(cm, xy, max(wall_m, cm.cell_m)) >= wall_m
     if ok.any():
         idx = np.flatnonzero(ok)
-        ok[idx] = ~behind_wall(cm, robot[idx], xy[idx])
+        ok[idx] = clear_sight(cm, robot[idx], xy[idx])
     return ok
 
 
@@ -195,5 +164,5 @@ def confirm_sight(
     out: BoolArray = (d >= near_m) & (d <= params.confirm_radius_m)
     if out.any():
         idx = np.flatnonzero(out)
-        out[idx] = ~behind_wall(cm, a[idx], b[idx])
+        out[idx] = clear_sight(cm, a[idx], b[idx])
     return out
