@@ -74,7 +74,12 @@ class WorldSpec:
     def __post_init__(self) -> None:
         if not (math.isfinite(self.spread_m_s) and self.spread_m_s > 0.0):
             raise InputError(f"world.spread_m_s must be > 0, got {self.spread_m_s}")
-        grid = self.grid()  # an unknown name or a bad file is an error here, naming world.map
+        try:  # an unknown name or a bad file is an error here, naming world.map
+            grid = self.grid()
+        except InputError as exc:
+            text = str(exc)
+            named = text if text.startswith("world.map") else f"world.map: {text}"
+            raise InputError(named) from None
         factor = self.field_factor(grid)
         if self.field_cell_m is not None and not (
             factor >= 1 and abs(self.field_cell_m / grid.resolution_m - factor) < 1e-6
