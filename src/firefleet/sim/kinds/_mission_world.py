@@ -429,6 +429,13 @@ class MissionSensors:
             m = min(m, self.ranging.quiet_ticks(m))
         return m
 
+    def quiet_readings(self, readings: Messages) -> Messages:
+        """What :meth:`read` gives at a quiet tick (:meth:`quiet_ticks`) after the tick
+        that read ``readings``: the same ranges (held between scans), air, tanks and
+        damage (the world steps at no quiet tick), no look and no detection."""
+        n = np.shape(readings["looked"])[0]
+        return {**readings, "looked": np.zeros(n), "thermal_detections": np.zeros((0, 5))}
+
     def skip(self, world: MissionWorldState, poses: FloatArray) -> None:
         """What :meth:`read` does at quiet ticks with the true poses (m, N, 3) of each:
         the range sensors count the ticks, the contact test notes each tick's poses."""
