@@ -320,8 +320,8 @@ def _frames(
     temperature left the radiance table: per pixel the mean band radiance of its
     ``sub`` x ``sub`` rays (summed along each sub-row, then the sub-rows: NumPy's
     order), back to a temperature (``np.interp`` both ways, ``slope_rad`` and
-    ``slope_c`` the tables' slopes: :func:`_tables`), plus the column offset and the noise, clipped to
-    ``camera[0:2]`` and quantised to ``camera[2]``."""
+    ``slope_c`` the tables' slopes: :func:`_tables`), plus the column offset and the
+    noise, clipped to ``camera[0:2]`` and quantised to ``camera[2]``."""
     min_c, max_c, step_k = camera[0], camera[1], camera[2]
     t_lo, t_hi = table_c[0], table_c[-1]
     step_c = (t_hi - t_lo) / (table_c.size - 1)

@@ -607,7 +607,9 @@ def run_staged(
 
     fast = quiet is not None and qs.stretch_ok(stages, drive, rng)
     consts = qs.stretch_constants(stack, n) if fast else None
-    quiet_readings = getattr(stages.sensors, "quiet_readings", None) if fast else None
+    quiet_readings: Callable[[Messages], Messages] | None = (
+        getattr(stages.sensors, "quiet_readings", None) if fast else None
+    )
     after = held if callable(quiet_readings) else None  # a stretch after a new state
     rec_next = 0  # index of the next tick to record in rec_steps
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
@@ -662,7 +664,7 @@ def run_staged(
                 hold: WheelCommand | None = command
                 if state is not before:  # what the next ticks read and would give
                     hold = None
-                    if after is not None:
+                    if after is not None and quiet_readings is not None:
                         inputs = DecideInputs(
                             k * dt, k, inputs.pose_estimate, quiet_readings(readings), {}
                         )

@@ -37,6 +37,7 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 from firefleet.perception.thermal._frames import _column_steps, _median3_nearest
+from firefleet.perception.thermal._select import order_pair
 from firefleet.perception.thermal._table import interp_table
 
 __all__ = ["describe_region", "filter_frame", "find_regions", "pairwise_sum"]
@@ -171,7 +172,11 @@ def find_regions(
     (H, W) int32, per label: top contrast (inf for a fiery one), area [px], bounding
     box ``(r0, c0, r1, c1)``)."""
     h, w = f.shape
-    background = np.median(f)
+    flat = f.ravel()  # np.median's: the mean of the middle two of an even count
+    lower, upper = order_pair(
+        flat, flat.size, flat.size // 2, np.empty(1024, np.int64), np.empty(flat.size)
+    )
+    background = upper if flat.size % 2 == 1 else (lower + upper) / 2
     ero = np.empty(w)
     opened = np.empty((h, w))
     lo_e = -(size // 2)

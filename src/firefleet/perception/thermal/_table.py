@@ -147,8 +147,8 @@ def interp_sorted_slopes(
     >>> xp = np.array([0.0, 1.0, 4.0, 9.0])
     >>> fp = np.sqrt(xp)
     >>> k = table_slopes(xp, fp)
-    >>> [float(interp_sorted_slopes(v, xp, fp, k, 1, 2)) == float(interp_sorted_from(v, xp, fp, 1, 2))
-    ...  for v in (-1.0, 0.5, 2.5, 4.0, 8.9, 20.0)]
+    >>> x = (-1.0, 0.5, 2.5, 4.0, 8.9, 20.0)
+    >>> [interp_sorted_slopes(v, xp, fp, k, 1, 2) == interp_sorted_from(v, xp, fp, 1, 2) for v in x]
     [True, True, True, True, True, True]
     """
     n = xp.size
