@@ -442,8 +442,7 @@ class MissionSensors:
         if self.ranging is not None:
             self.ranging.skip(poses.shape[0])
         if self.world.contacts is not None:
-            for pose in poses:
-                self.world.contacts.check(world.log, pose)
+            self.world.contacts.check_ticks(world.log, poses)
 
     def read(self, world: MissionWorldState, drive: DriveState) -> Messages:
         """Readings at this tick, by name (module notes)."""
