@@ -226,6 +226,9 @@ def mission_stages(scenario: Scenario, decider: Decider, rng: np.random.Generato
         dt_s=scenario.dt_s,
         rng=rng,
         visible=visible,
+        # the tactics read the ranges at their navigation ticks, which are never quiet
+        # (control.mission._quiet): a scan between is no news for the decision
+        scans_in_stretch=True,
     )
     stages: Any = dataclasses.replace  # the Stages fields are typed for the default stages
     out: Stages = stages(
