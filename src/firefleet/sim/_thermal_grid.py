@@ -162,29 +162,44 @@ def _walk(
 
 
 @numba.njit(cache=True)
-def _people_along(
-    x0: float,
-    y0: float,
-    ux: float,
-    uy: float,
-    people: np.ndarray,
-    person_w: float,
-    s_people: np.ndarray,
+def _people_seen_from(
+    x0: float, y0: float, people: np.ndarray, person_w: float, billboard: np.ndarray
 ) -> None:  # pragma: no cover - compiled
-    """Where the horizontal ray (ux, uy) from (x0, y0) meets each person's billboard
-    (facing the camera) [m], inf where it misses."""
+    """Each person's billboard (facing the camera at (x0, y0)) as :func:`_people_along`
+    takes it, the same for every column of a frame: ``billboard[v]`` = (its right edge
+    ``wx``, ``wy``, its width ``ex``, ``ey``, ``wx ey - wy ex``, 1 if it is at a
+    distance from the camera, else 0)."""
     for v in range(people.shape[0]):
         px, py = people[v, 0] - x0, people[v, 1] - y0
         dist = np.sqrt(px * px + py * py)
-        s_people[v] = np.inf
+        billboard[v, 5] = 0.0
         if dist < 1e-9:
             continue
         ex, ey = -py / dist * person_w, px / dist * person_w  # the billboard's width
         wx, wy = px - 0.5 * ex, py - 0.5 * ey  # its right edge
+        billboard[v, 0], billboard[v, 1], billboard[v, 2], billboard[v, 3] = wx, wy, ex, ey
+        billboard[v, 4] = wx * ey - wy * ex
+        billboard[v, 5] = 1.0
+
+
+@numba.njit(cache=True)
+def _people_along(
+    ux: float,
+    uy: float,
+    billboard: np.ndarray,
+    s_people: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Where the horizontal ray (ux, uy) from the camera meets each person's billboard
+    (:func:`_people_seen_from`) [m], inf where it misses."""
+    for v in range(billboard.shape[0]):
+        s_people[v] = np.inf
+        if billboard[v, 5] == 0.0:
+            continue
+        wx, wy, ex, ey = billboard[v, 0], billboard[v, 1], billboard[v, 2], billboard[v, 3]
         den = ux * ey - uy * ex
         if den == 0.0:
             continue
-        s = (wx * ey - wy * ex) / den
+        s = billboard[v, 4] / den
         u = (wx * uy - wy * ux) / den
         if s > 1e-9 and 0.0 <= u <= 1.0:
             s_people[v] = s
@@ -230,9 +245,11 @@ def _cast(
     n_people = people.shape[0]
     s_people = np.empty(n_people)
     seen = np.empty(n_people, dtype=np.int64)
+    billboard = np.empty((n_people, 6))
     for k in range(n_robots):
         x0, y0, th = poses[k, 0], poses[k, 1], poses[k, 2]
         ct, st = np.cos(th), np.sin(th)
+        _people_seen_from(x0, y0, people, person_w, billboard)
         for c in range(n_cols):
             dx = ct + xn[c] * st
             dy = st - xn[c] * ct
@@ -244,7 +261,7 @@ def _cast(
                 if b_out[i]:
                     fires[n_fires] = i
                     n_fires += 1
-            _people_along(x0, y0, ux, uy, people, person_w, s_people)
+            _people_along(ux, uy, billboard, s_people)
             n_seen = 0  # the people whose billboard the column's plane meets, in order
             for v in range(n_people):
                 if s_people[v] < np.inf:
