@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 import scipy.ndimage as ndi
 import scipy.sparse
@@ -295,13 +296,51 @@ def line_of_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
     seg = np.hypot(*(b - a).T)
     n = max(2, math.ceil(float(seg.max()) / (0.5 * cm.cell_m)) + 1)
     s = np.linspace(0.0, 1.0, n)
-    pts = a[:, None] + s[None, :, None] * (b - a)[:, None]
-    rc = cm.cell_of(pts)
-    blocked = cm.opaque[rc[..., 0], rc[..., 1]]
-    along = s[None] * seg[:, None]
-    ends = (along < cm.cell_m) | (along > seg[:, None] - cm.cell_m)
-    out: BoolArray = ~np.any(blocked & ~ends, axis=1)
+    ox, oy = (float(v) for v in cm.grid.origin_m)
+    out = np.empty(len(a), dtype=bool)
+    _sight_kernel(
+        np.ascontiguousarray(a), np.ascontiguousarray(b), s, seg, ox, oy,
+        float(cm.grid.resolution_m), int(cm.grid.shape[0]), int(cm.factor), cm.opaque,
+        float(cm.cell_m), out,
+    )  # fmt: skip
     return out
+
+
+@numba.njit(cache=True)
+def _sight_kernel(
+    a: FloatArray,
+    b: FloatArray,
+    s: FloatArray,
+    seg: FloatArray,
+    ox: float,
+    oy: float,
+    res: float,
+    rows: int,
+    factor: int,
+    opaque: BoolArray,
+    cell_m: float,
+    out: BoolArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`line_of_sight`'s samples in one compiled pass, each the array expressions'
+    arithmetic (``a + s (b - a)``, :meth:`CoarseMap.cell_of`: the map's cell floored by
+    ``factor``, clipped), a line stopping at its first opaque sample off the ends."""
+    hc, wc = opaque.shape
+    for m in range(a.shape[0]):
+        dx = b[m, 0] - a[m, 0]
+        dy = b[m, 1] - a[m, 1]
+        clear = True
+        for j in range(s.size):
+            along = s[j] * seg[m]
+            if along < cell_m or along > seg[m] - cell_m:
+                continue  # the cells by either end are not checked
+            col = np.int64(math.floor((a[m, 0] + s[j] * dx - ox) / res))
+            row = rows - 1 - np.int64(math.floor((a[m, 1] + s[j] * dy - oy) / res))
+            r = min(max(row // factor, 0), hc - 1)
+            c = min(max(col // factor, 0), wc - 1)
+            if opaque[r, c]:
+                clear = False
+                break
+        out[m] = clear
 
 
 def clear_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
