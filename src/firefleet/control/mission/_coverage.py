@@ -101,10 +101,21 @@ class CoarseMap:
         return int(h), int(w)
 
     def cell_of(self, xy_m: FloatArray) -> IntArray:
-        """Coarse (row, col) of points (..., 2), clipped onto the grid."""
-        rc = self.grid.cell_of(xy_m) // self.factor
+        """Coarse (row, col) of points (..., 2), clipped onto the grid (the map's cell
+        floored by ``factor``; finite points in one compiled pass, the same numbers)."""
+        xy = np.asarray(xy_m, dtype=float)
         hc, wc = self.shape
-        return np.stack([np.clip(rc[..., 0], 0, hc - 1), np.clip(rc[..., 1], 0, wc - 1)], -1)
+        if not np.isfinite(xy).all():  # NaN's cell is NumPy's cast's business
+            rc = self.grid.cell_of(xy) // self.factor
+            return np.stack([np.clip(rc[..., 0], 0, hc - 1), np.clip(rc[..., 1], 0, wc - 1)], -1)
+        flat = np.ascontiguousarray(xy.reshape(-1, 2))
+        out = np.empty((flat.shape[0], 2), dtype=np.int64)
+        ox, oy = (float(v) for v in self.grid.origin_m)
+        _coarse_cells(
+            flat, ox, oy, float(self.grid.resolution_m), int(self.grid.shape[0]),
+            int(self.factor), hc, wc, out,
+        )  # fmt: skip
+        return out.reshape((*xy.shape[:-1], 2))
 
     def _centre_rc(self, cells: IntArray) -> FloatArray:
         """The map's (fractional) row and column (..., 2) of coarse cells' centres."""
@@ -304,6 +315,27 @@ def line_of_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
         float(cm.cell_m), out,
     )  # fmt: skip
     return out
+
+
+@numba.njit(cache=True)
+def _coarse_cells(
+    xy: FloatArray,
+    ox: float,
+    oy: float,
+    res: float,
+    rows: int,
+    factor: int,
+    hc: int,
+    wc: int,
+    out: IntArray,
+) -> None:  # pragma: no cover - compiled
+    """:meth:`CoarseMap.cell_of` of finite points (M, 2) into ``out`` (M, 2): the map's
+    cell (:meth:`OccupancyGrid.cell_of`'s arithmetic) floored by ``factor``, clipped."""
+    for m in range(xy.shape[0]):
+        col = int(math.floor((xy[m, 0] - ox) / res)) // factor
+        row = (rows - 1 - int(math.floor((xy[m, 1] - oy) / res))) // factor
+        out[m, 0] = min(max(row, 0), hc - 1)
+        out[m, 1] = min(max(col, 0), wc - 1)
 
 
 @numba.njit(cache=True)
