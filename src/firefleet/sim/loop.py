@@ -607,9 +607,7 @@ def run_staged(
 
     fast = quiet is not None and qs.stretch_ok(stages, drive, rng)
     consts = qs.stretch_constants(stack, n) if fast else None
-    quiet_readings: Callable[[Messages], Messages] | None = (
-        getattr(stages.sensors, "quiet_readings", None) if fast else None
-    )
+    quiet_readings = getattr(stages.sensors, "quiet_readings", None) if fast else None
     after = held if callable(quiet_readings) else None  # a stretch after a new state
     rec_next = 0  # index of the next tick to record in rec_steps
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
@@ -661,15 +659,10 @@ def run_staged(
             k += 1
             if fast and not sent and command.voltage_v is None:
                 # the quiet stretch: ticks where only the wheels turn (module notes)
-                hold: WheelCommand | None = command
-                if state is not before:  # what the next ticks read and would give
-                    hold = None
-                    if after is not None and quiet_readings is not None:
-                        inputs = DecideInputs(
-                            k * dt, k, inputs.pose_estimate, quiet_readings(readings), {}
-                        )
-                        hold = after(state, inputs)
-                if hold is not None and hold.voltage_v is None and not hold.outbox:
+                hold, inputs = qs.held_command(
+                    state, before, command, inputs, readings, k, dt, after, quiet_readings
+                )
+                if hold is not None:
                     while rec_next < rec_steps.size and rec_steps[rec_next] < k:
                         rec_next += 1
                     limit = min(int(k1), n_steps) - k
