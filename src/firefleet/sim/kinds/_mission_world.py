@@ -482,7 +482,11 @@ class MissionSensors:
             rng=self.rng,
             scene=SCENE,
         )
-        depth = depth * (1.0 + self.depth_noise * self.rng.standard_normal(depth.shape))
+        noise = self.rng.standard_normal(depth.shape)  # depth * (1 + sigma z), in place
+        noise *= self.depth_noise
+        noise += 1.0
+        noise *= depth
+        depth = noise
         rows: list[list[float]] = []
         for i in range(frames.shape[0]):
             if world.damaged[i]:
