@@ -332,8 +332,8 @@ def _coarse_cells(
     """:meth:`CoarseMap.cell_of` of finite points (M, 2) into ``out`` (M, 2): the map's
     cell (:meth:`OccupancyGrid.cell_of`'s arithmetic) floored by ``factor``, clipped."""
     for m in range(xy.shape[0]):
-        col = int(math.floor((xy[m, 0] - ox) / res)) // factor
-        row = (rows - 1 - int(math.floor((xy[m, 1] - oy) / res))) // factor
+        col = math.floor((xy[m, 0] - ox) / res) // factor
+        row = (rows - 1 - math.floor((xy[m, 1] - oy) / res)) // factor
         out[m, 0] = min(max(row, 0), hc - 1)
         out[m, 1] = min(max(col, 0), wc - 1)
 
