@@ -19,7 +19,13 @@ from firefleet.perception.thermal._detect_kernel import (
 )
 from firefleet.perception.thermal._frames import destripe
 from firefleet.perception.thermal._radiometry import _radiance_table
-from firefleet.perception.thermal._table import interp_sorted, interp_sorted_from, interp_table
+from firefleet.perception.thermal._table import (
+    interp_sorted,
+    interp_sorted_from,
+    interp_sorted_slopes,
+    interp_table,
+    table_slopes,
+)
 
 from ._detect_reference import detect_reference
 
@@ -184,3 +190,10 @@ def test_table_interpolation_is_numpys() -> None:
     for lo, hi in ((0, 1), (4000, 4001), (10, 5000), (table_c.size - 2, table_c.size - 1)):
         from_guess = np.array([interp_sorted_from(v, table_rad, table_c, lo, hi) for v in rad])
         np.testing.assert_array_equal(from_guess, back)
+        # the slopes given instead of divided out: the same numbers both ways
+        back_k = table_slopes(table_rad, table_c)
+        sloped = [interp_sorted_slopes(v, table_rad, table_c, back_k, lo, hi) for v in rad]
+        np.testing.assert_array_equal(sloped, back)
+        fwd_k = table_slopes(table_c, table_rad)
+        sloped = [interp_sorted_slopes(v, table_c, table_rad, fwd_k, lo, hi) for v in x]
+        np.testing.assert_array_equal(sloped, got)

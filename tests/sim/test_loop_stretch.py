@@ -67,7 +67,8 @@ def test_mission_with_stretches_equals_the_tick_by_tick_loop(
 ) -> None:
     """A mission-office run of 12 s (exploration, the first frames, range scans,
     the contact test) with the quiet stretches and without: every array equal, and the
-    stretches covered most ticks."""
+    stretches covered most ticks (74 %: those after a tick that changed the decision's
+    state and those with a range scan too; 50 % without either)."""
     scenario = dataclasses.replace(
         firefleet.load_scenario("examples/missions/mission-office.yaml"), duration_s=12.0
     )
@@ -82,7 +83,7 @@ def test_mission_with_stretches_equals_the_tick_by_tick_loop(
     fast = firefleet.simulate(scenario).arrays()
     monkeypatch.setattr(qs, "stretch_ok", lambda *a: False)
     slow = firefleet.simulate(scenario).arrays()
-    assert sum(ticks) > 0.4 * scenario.n_steps, sum(ticks)
+    assert sum(ticks) > 0.7 * scenario.n_steps, sum(ticks)
     assert fast.keys() == slow.keys()
     for name in fast:
         a, b = np.asarray(fast[name]), np.asarray(slow[name])

@@ -38,6 +38,14 @@ def test_contact_log_equals_the_test_on_every_tick() -> None:
     assert not want.all()
     # the bound keeps far fewer points than every tick's
     assert len(out["near_wall_xy_m"]) < t * n
+    # the ticks of a quiet stretch, checked at once: the same log, entry for entry
+    batch = check.init(n)
+    for k in range(0, t, 37):
+        check.check_ticks(batch, pose[k : k + 37])
+    assert len(batch["near_wall"]) == len(log["near_wall"])
+    for a, b in zip(batch["near_wall"], log["near_wall"], strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(batch["touched_robot"], log["touched_robot"])
 
 
 def test_mission_records_its_robots_at_ten_hertz() -> None:

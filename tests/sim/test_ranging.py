@@ -405,3 +405,34 @@ def test_a_crowd_blocks_beams_as_discs(seed: int) -> None:
             expect = min(wall, robot)
             assert r == pytest.approx(expect if expect <= 4.0 else math.inf, abs=1e-9)
     assert blocked_by_robot > 20  # the crowd matters in this test
+
+
+def test_skipped_ticks_scan_as_the_reads_would() -> None:
+    """A quiet stretch's ticks with the scans in it (``skip`` with the poses): the same
+    readings and the same noise draws as reading every tick."""
+    grid, _ = wall_ahead(3.0)
+    start = np.array([[0.5, 1.0, 0.3], [1.0, 1.5, 2.0]])
+    poses = start[None] + np.linspace(0.0, 0.5, 40)[:, None, None] * np.array([1.0, 0.5, 0.1])
+
+    def stage() -> RangeSensors:
+        return RangeSensors(
+            grid,
+            0.2,
+            lidar=LidarParams(beams=16, noise_m=0.02, rate_hz=10.0),
+            ultrasonic=UltrasonicParams(count=8, rate_hz=15.0),
+            dt_s=0.01,
+            rng=np.random.default_rng(7),
+        )
+
+    every, batched = stage(), stage()
+    for k in range(39):
+        every.read(None, SimpleNamespace(pose=poses[k]))
+    batched.read(None, SimpleNamespace(pose=poses[0]))
+    assert batched.quiet_ticks(38) < 38  # scans due: not quiet for held readings
+    assert batched.quiet_ticks(38, scans=True) == 38
+    batched.skip(38, None, poses[1:39])  # ticks 1 .. 38
+    got = batched.read(None, SimpleNamespace(pose=poses[39]))
+    want = every.read(None, SimpleNamespace(pose=poses[39]))
+    for name in want:
+        np.testing.assert_array_equal(got[name], want[name])
+    assert batched.rng.random() == every.rng.random()

@@ -12,6 +12,7 @@ the team's last pose, the sensors' tick count and each tick's true poses).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -26,10 +27,19 @@ from firefleet.sim._link_stage import IdealLink
 from firefleet.sim.drive import DriveStack, DriveState
 
 if TYPE_CHECKING:
-    from firefleet.sim.loop import DecideInputs, QuietTicks, Stages, WheelCommand, WorldState
+    from firefleet.sim.loop import (
+        DecideInputs,
+        HeldCommand,
+        Messages,
+        QuietTicks,
+        Stages,
+        WheelCommand,
+        WorldState,
+    )
 
 __all__ = [
     "drive_tick",
+    "held_command",
     "quiet_ticks",
     "run_stretch",
     "stretch_constants",
@@ -55,6 +65,35 @@ def stretch_ok(stages: Stages, drive: DriveState, rng: np.random.Generator | Non
         and rng is None
         and drive.odometry is None
     )
+
+
+def held_command(
+    state: Any,
+    before: Any,
+    command: WheelCommand,
+    inputs: DecideInputs,
+    readings: Messages,
+    k: int,
+    dt_s: float,
+    held: HeldCommand | None,
+    quiet_readings: Callable[[Messages], Messages] | None,
+) -> tuple[WheelCommand | None, DecideInputs]:
+    """The command a stretch from tick ``k`` would hold, and the inputs its quiet test
+    reads: after a tick (its ``inputs`` and ``readings``) that left the state as it was
+    (``state is before``), its ``command`` and inputs; after one that changed it, what
+    the decider's ``held`` gives with the sensors' ``quiet_readings`` (None without
+    them); None too for a command with voltages or messages."""
+    hold: WheelCommand | None = command
+    if state is not before:  # what the next ticks read and would give
+        hold = None
+        if held is not None and quiet_readings is not None:
+            from firefleet.sim.loop import DecideInputs
+
+            inputs = DecideInputs(k * dt_s, k, inputs.pose_estimate, quiet_readings(readings), {})
+            hold = held(state, inputs)
+    if hold is None or hold.voltage_v is not None or hold.outbox:
+        return None, inputs
+    return hold, inputs
 
 
 def quiet_ticks(

@@ -27,6 +27,7 @@ coefficients for radiation transport through smoke", Combust. Sci. Technol. 175,
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numba
@@ -35,7 +36,7 @@ from numpy.typing import ArrayLike
 
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError, as_float_array, check_fields
-from firefleet.perception.thermal._table import interp_sorted_from
+from firefleet.perception.thermal._table import interp_sorted_slopes, table_slopes
 from firefleet.world import BODY_C, OccupancyGrid
 
 __all__ = ["GridThermalScene", "grid_thermal_celsius", "grid_thermal_frames"]
@@ -161,29 +162,44 @@ def _walk(
 
 
 @numba.njit(cache=True)
-def _people_along(
-    x0: float,
-    y0: float,
-    ux: float,
-    uy: float,
-    people: np.ndarray,
-    person_w: float,
-    s_people: np.ndarray,
+def _people_seen_from(
+    x0: float, y0: float, people: np.ndarray, person_w: float, billboard: np.ndarray
 ) -> None:  # pragma: no cover - compiled
-    """Where the horizontal ray (ux, uy) from (x0, y0) meets each person's billboard
-    (facing the camera) [m], inf where it misses."""
+    """Each person's billboard (facing the camera at (x0, y0)) as :func:`_people_along`
+    takes it, the same for every column of a frame: ``billboard[v]`` = (its right edge
+    ``wx``, ``wy``, its width ``ex``, ``ey``, ``wx ey - wy ex``, 1 if it is at a
+    distance from the camera, else 0)."""
     for v in range(people.shape[0]):
         px, py = people[v, 0] - x0, people[v, 1] - y0
         dist = np.sqrt(px * px + py * py)
-        s_people[v] = np.inf
+        billboard[v, 5] = 0.0
         if dist < 1e-9:
             continue
         ex, ey = -py / dist * person_w, px / dist * person_w  # the billboard's width
         wx, wy = px - 0.5 * ex, py - 0.5 * ey  # its right edge
+        billboard[v, 0], billboard[v, 1], billboard[v, 2], billboard[v, 3] = wx, wy, ex, ey
+        billboard[v, 4] = wx * ey - wy * ex
+        billboard[v, 5] = 1.0
+
+
+@numba.njit(cache=True)
+def _people_along(
+    ux: float,
+    uy: float,
+    billboard: np.ndarray,
+    s_people: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Where the horizontal ray (ux, uy) from the camera meets each person's billboard
+    (:func:`_people_seen_from`) [m], inf where it misses."""
+    for v in range(billboard.shape[0]):
+        s_people[v] = np.inf
+        if billboard[v, 5] == 0.0:
+            continue
+        wx, wy, ex, ey = billboard[v, 0], billboard[v, 1], billboard[v, 2], billboard[v, 3]
         den = ux * ey - uy * ex
         if den == 0.0:
             continue
-        s = (wx * ey - wy * ex) / den
+        s = billboard[v, 4] / den
         u = (wx * uy - wy * ux) / den
         if s > 1e-9 and 0.0 <= u <= 1.0:
             s_people[v] = s
@@ -229,9 +245,11 @@ def _cast(
     n_people = people.shape[0]
     s_people = np.empty(n_people)
     seen = np.empty(n_people, dtype=np.int64)
+    billboard = np.empty((n_people, 6))
     for k in range(n_robots):
         x0, y0, th = poses[k, 0], poses[k, 1], poses[k, 2]
         ct, st = np.cos(th), np.sin(th)
+        _people_seen_from(x0, y0, people, person_w, billboard)
         for c in range(n_cols):
             dx = ct + xn[c] * st
             dy = st - xn[c] * ct
@@ -243,7 +261,7 @@ def _cast(
                 if b_out[i]:
                     fires[n_fires] = i
                     n_fires += 1
-            _people_along(x0, y0, ux, uy, people, person_w, s_people)
+            _people_along(ux, uy, billboard, s_people)
             n_seen = 0  # the people whose billboard the column's plane meets, in order
             for v in range(n_people):
                 if s_people[v] < np.inf:
@@ -308,6 +326,8 @@ def _frames(
     sub: int,
     table_c: np.ndarray,
     table_rad: np.ndarray,
+    slope_rad: np.ndarray,
+    slope_c: np.ndarray,
     offsets: np.ndarray,
     noise: np.ndarray,
     camera: np.ndarray,
@@ -316,8 +336,9 @@ def _frames(
     each pixel's central-ray depth [m] (NaN: nothing on the grid), and False if a
     temperature left the radiance table: per pixel the mean band radiance of its
     ``sub`` x ``sub`` rays (summed along each sub-row, then the sub-rows: NumPy's
-    order), back to a temperature, plus the column offset and the noise, clipped to
-    ``camera[0:2]`` and quantised to ``camera[2]``."""
+    order), back to a temperature (``np.interp`` both ways, ``slope_rad`` and
+    ``slope_c`` the tables' slopes: :func:`_tables`), plus the column offset and the
+    noise, clipped to ``camera[0:2]`` and quantised to ``camera[2]``."""
     min_c, max_c, step_k = camera[0], camera[1], camera[2]
     t_lo, t_hi = table_c[0], table_c[-1]
     step_c = (t_hi - t_lo) / (table_c.size - 1)
@@ -343,27 +364,45 @@ def _frames(
                     t = min(max(t, t_lo), t_hi)
                 j = int((t - t_lo) * per_step)
                 last_t = temps[k, c, r]
-                last_rad = interp_sorted_from(t, table_c, table_rad, j, j + 1)
+                last_rad = interp_sorted_slopes(t, table_c, table_rad, slope_rad, j, j + 1)
                 rad[c, r] = last_rad
-        for i in range(h_px):
-            for j in range(w_px):
+        uni_t = np.nan
+        uni_back = np.nan
+        for j in range(w_px):  # a pixel column's rays lie together in memory
+            for i in range(h_px):
                 d = depth[k, j * sub + mid, i * sub + mid]
                 centre[k, i, j] = d if np.isfinite(d) else np.nan
-                total = 0.0
-                coolest = np.inf
-                hottest = -np.inf
-                for a in range(sub):
-                    part = 0.0
-                    for b in range(sub):
-                        part += rad[j * sub + b, i * sub + a]
-                        coolest = min(coolest, temps[k, j * sub + b, i * sub + a])
-                        hottest = max(hottest, temps[k, j * sub + b, i * sub + a])
-                    total += part
+                if sub == 2:  # the default: the loops below, unrolled
+                    c0, c1, r0, r1 = 2 * j, 2 * j + 1, 2 * i, 2 * i + 1
+                    total = 0.0 + ((0.0 + rad[c0, r0]) + rad[c1, r0])
+                    total += (0.0 + rad[c0, r1]) + rad[c1, r1]
+                    t00, t10 = temps[k, c0, r0], temps[k, c1, r0]
+                    t01, t11 = temps[k, c0, r1], temps[k, c1, r1]
+                    coolest = min(min(min(t00, t10), t01), t11)
+                    hottest = max(max(max(t00, t10), t01), t11)
+                else:
+                    total = 0.0
+                    coolest = np.inf
+                    hottest = -np.inf
+                    for a in range(sub):
+                        part = 0.0
+                        for b in range(sub):
+                            part += rad[j * sub + b, i * sub + a]
+                            coolest = min(coolest, temps[k, j * sub + b, i * sub + a])
+                            hottest = max(hottest, temps[k, j * sub + b, i * sub + a])
+                        total += part
                 # the mean radiance's temperature lies between the coolest ray's and
                 # the hottest's
-                lo = int((min(max(coolest, t_lo), t_hi) - t_lo) * per_step)
-                hi = int((min(max(hottest, t_lo), t_hi) - t_lo) * per_step) + 1
-                t = interp_sorted_from(total / (sub * sub), table_rad, table_c, lo, hi)
+                if coolest == hottest and coolest == uni_t:  # the last uniform pixel's
+                    t = uni_back
+                else:
+                    lo = int((min(max(coolest, t_lo), t_hi) - t_lo) * per_step)
+                    hi = int((min(max(hottest, t_lo), t_hi) - t_lo) * per_step) + 1
+                    t = interp_sorted_slopes(
+                        total / (sub * sub), table_rad, table_c, slope_c, lo, hi
+                    )
+                    if coolest == hottest:  # its rays all meet one temperature
+                        uni_t, uni_back = coolest, t
                 t = t + offsets[j]
                 t = t + noise[k, i, j]
                 t = min(max(t, min_c), max_c)
@@ -371,6 +410,19 @@ def _frames(
                     t = np.rint(t / step_k) * step_k
                 frames[k, i, j] = t
     return frames, centre, ok
+
+
+@functools.lru_cache(maxsize=1)
+def _tables() -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The 8-14 um radiance table (temperatures [C], radiances) and its slopes both ways
+    (:func:`~firefleet.perception.thermal._table.table_slopes`), made once."""
+    from firefleet.perception.thermal._radiometry import _radiance_table
+
+    table_c, table_rad = _radiance_table((8.0, 14.0))
+    slope_rad, slope_c = table_slopes(table_c, table_rad), table_slopes(table_rad, table_c)
+    slope_rad.flags.writeable = False
+    slope_c.flags.writeable = False
+    return table_c, table_rad, slope_rad, slope_c
 
 
 def _scene_array(scene: GridThermalScene, mount_height_m: float) -> np.ndarray:
@@ -474,19 +526,19 @@ def grid_thermal_frames(
     rays, and the camera (``camera``: column offsets (W,) [K], noise (N, H, W) [K],
     scene range min and max [C], quantisation step [K]; no optical blur).
     """
-    from firefleet.perception.thermal._radiometry import _radiance_table
-
     temps, depth = _cast_rays(
         poses, grid, temperature_c, burning, people_xy_m, xn, yn, mount_height_m, scene
     )
     offsets, noise, min_c, max_c, step_k = camera
-    table_c, table_rad = _radiance_table((8.0, 14.0))
+    table_c, table_rad, slope_rad, slope_c = _tables()
     frames, centre, ok = _frames(
         temps,
         depth,
         int(supersample),
         table_c,
         table_rad,
+        slope_rad,
+        slope_c,
         np.ascontiguousarray(offsets, dtype=np.float64),
         np.ascontiguousarray(noise, dtype=np.float64),
         np.array([min_c, max_c, step_k], dtype=np.float64),

@@ -67,6 +67,7 @@ __all__ = [
     "DecideInputs",
     "Decider",
     "FusedRun",
+    "HeldCommand",
     "IdealLink",
     "Link",
     "NoEstimation",
@@ -328,6 +329,12 @@ of the ticks ``k, k + 1, ...`` (at most ``limit``) it would answer the same way,
 state and the same command, with the same readings, inbox and no new pose but the time
 (the stages see to that: `sim._quiet_stretch.stretch_ok`)."""
 
+HeldCommand = Callable[[Any, DecideInputs], "WheelCommand | None"]
+"""``command = held(state, inputs)``: after a tick whose decision returned a new
+``state``, the command the decision gives at a quiet tick that follows it with the
+readings ``inputs`` (:data:`QuietTicks` on that state then says how many); None: it
+does not know (the next tick runs in full)."""
+
 
 @dataclass(frozen=True)
 class Decider:
@@ -349,6 +356,11 @@ class Decider:
     quiet_ticks : callable, optional
         The decision's quiet ticks (:data:`QuietTicks`) for the staged loop's quiet
         stretches; None: none.
+    held : callable, optional
+        The command of the quiet ticks after a tick that changed the state
+        (:data:`HeldCommand`): with it (and sensors that tell their quiet readings) a
+        stretch may start right after such a tick; None: a stretch starts only after a
+        tick that left the state as it was.
     """
 
     init: Callable[[Scenario], tuple[Any, Any]]
@@ -356,6 +368,7 @@ class Decider:
     series: tuple[str, ...] = ()
     uses_estimate: bool = False
     quiet_ticks: QuietTicks | None = None
+    held: HeldCommand | None = None
 
 
 FusedRun = Callable[[Scenario, FloatArray, NDArray[np.int64], "ProgressCallback | None"], SimResult]
@@ -496,6 +509,7 @@ def run_loop(
         n_steps,
         progress=progress,
         quiet=decider.quiet_ticks,
+        held=decider.held,
     )
     return SimResult(
         scenario=scenario,
@@ -528,6 +542,7 @@ def run_staged(
     progress: ProgressCallback | None = None,
     rng: np.random.Generator | None = None,
     quiet: QuietTicks | None = None,
+    held: HeldCommand | None = None,
 ) -> Recording:
     """The staged loop: ticks 0 .. ``n_steps``, each stage a function on arrays.
 
@@ -555,6 +570,10 @@ def run_staged(
         theirs (:mod:`firefleet.sim._quiet_stretch`), the ticks where only the wheels turn
         run in one compiled call, the same numbers as tick by tick; None: every tick in
         full.
+    held : callable, optional
+        The decision's command at the quiet ticks after a tick that changed its state
+        (:data:`HeldCommand`): a stretch may start there too (with sensors that give
+        their ``quiet_readings``); None: only after a tick that left the state alone.
 
     Returns
     -------
@@ -588,6 +607,8 @@ def run_staged(
 
     fast = quiet is not None and qs.stretch_ok(stages, drive, rng)
     consts = qs.stretch_constants(stack, n) if fast else None
+    quiet_readings = getattr(stages.sensors, "quiet_readings", None) if fast else None
+    after = held if callable(quiet_readings) else None  # a stretch after a new state
     rec_next = 0  # index of the next tick to record in rec_steps
     for k0, k1 in itertools.pairwise(chunk_bounds(n_steps)):
         k = int(k0)
@@ -636,19 +657,23 @@ def run_staged(
                     drive, voltage, stack, load_torque_n_m=world.load_torque_n_m, rng=rng
                 )
             k += 1
-            if fast and state is before and not sent and command.voltage_v is None:
+            if fast and not sent and command.voltage_v is None:
                 # the quiet stretch: ticks where only the wheels turn (module notes)
-                while rec_next < rec_steps.size and rec_steps[rec_next] < k:
-                    rec_next += 1
-                limit = min(int(k1), n_steps) - k
-                if rec_next < rec_steps.size:
-                    limit = min(limit, int(rec_steps[rec_next]) - k)
-                m = qs.quiet_ticks(stages, world, quiet, state, inputs, params, k, dt, limit)
-                if m > 0:
-                    drive, estimate, world = qs.run_stretch(
-                        m, k, drive, stack, stages, world, command, estimate, consts
-                    )
-                    k += m
+                hold, inputs = qs.held_command(
+                    state, before, command, inputs, readings, k, dt, after, quiet_readings
+                )
+                if hold is not None:
+                    while rec_next < rec_steps.size and rec_steps[rec_next] < k:
+                        rec_next += 1
+                    limit = min(int(k1), n_steps) - k
+                    if rec_next < rec_steps.size:
+                        limit = min(limit, int(rec_steps[rec_next]) - k)
+                    m = qs.quiet_ticks(stages, world, quiet, state, inputs, params, k, dt, limit)
+                    if m > 0:
+                        drive, estimate, world = qs.run_stretch(
+                            m, k, drive, stack, stages, world, hold, estimate, consts
+                        )
+                        k += m
         if progress is not None:
             progress(n_steps if command.done else min(int(k1), n_steps), n_steps)
         if command.done:

@@ -56,6 +56,7 @@ from __future__ import annotations
 import math
 import weakref
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -89,6 +90,13 @@ def _radius(robot_radius_m: float) -> float:
     if not (math.isfinite(robot_radius_m) and robot_radius_m >= 0.0):
         raise InputError(f"robot_radius_m must be a finite number >= 0, got {robot_radius_m}")
     return float(robot_radius_m)
+
+
+@dataclass(frozen=True, eq=False)
+class _AtPose:
+    """What :meth:`RangeSensors.read` looks at of the team's drive: its true poses."""
+
+    pose: FloatArray
 
 
 _CLEARANCE: weakref.WeakKeyDictionary[OccupancyGrid, FloatArray] = weakref.WeakKeyDictionary()
@@ -395,10 +403,13 @@ class RangeSensors:
         f = params.rate_hz * self.dt_s
         return k == 0 or f >= 1.0 or math.floor(k * f + 1e-9) != math.floor((k - 1) * f + 1e-9)
 
-    def quiet_ticks(self, limit: int) -> int:
+    def quiet_ticks(self, limit: int, scans: bool = False) -> int:
         """How many of the next ticks (at most ``limit``) scan nothing: :meth:`read` would
         give the held readings; :meth:`skip` counts them instead (the loop's quiet
-        stretches)."""
+        stretches). ``scans``: the scans due among them count too (for a decision that
+        does not read the ranges at its quiet ticks): :meth:`skip` then makes them."""
+        if scans:
+            return limit if all(n in self._last for n in self.sensors) else 0
         tick, m = self._tick, 0
         try:
             while m < limit:
@@ -410,9 +421,18 @@ class RangeSensors:
             self._tick = tick
         return m
 
-    def skip(self, m: int) -> None:
-        """Count ``m`` ticks that scanned nothing (:meth:`quiet_ticks`)."""
-        self._tick += m
+    def skip(self, m: int, world: Any = None, poses: FloatArray | None = None) -> None:
+        """Count ``m`` ticks that scanned nothing (:meth:`quiet_ticks`); with the true
+        poses (m, N, 3) of each, make the scans due among them as :meth:`read` would
+        (the same noise draws in the same order)."""
+        if poses is None:
+            self._tick += m
+            return
+        for j in range(m):
+            if any(self._due(p) for p in self.sensors.values()):
+                self.read(world, _AtPose(poses[j]))
+            else:
+                self._tick += 1
 
     def read(self, world: Any, drive: Any) -> dict[str, FloatArray]:
         """Readings by name at this tick (held from the last scan between scans)."""

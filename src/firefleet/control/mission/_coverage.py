@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 import scipy.ndimage as ndi
 import scipy.sparse
@@ -100,10 +101,21 @@ class CoarseMap:
         return int(h), int(w)
 
     def cell_of(self, xy_m: FloatArray) -> IntArray:
-        """Coarse (row, col) of points (..., 2), clipped onto the grid."""
-        rc = self.grid.cell_of(xy_m) // self.factor
+        """Coarse (row, col) of points (..., 2), clipped onto the grid (the map's cell
+        floored by ``factor``; finite points in one compiled pass, the same numbers)."""
+        xy = np.asarray(xy_m, dtype=float)
         hc, wc = self.shape
-        return np.stack([np.clip(rc[..., 0], 0, hc - 1), np.clip(rc[..., 1], 0, wc - 1)], -1)
+        if not np.isfinite(xy).all():  # NaN's cell is NumPy's cast's business
+            rc = self.grid.cell_of(xy) // self.factor
+            return np.stack([np.clip(rc[..., 0], 0, hc - 1), np.clip(rc[..., 1], 0, wc - 1)], -1)
+        flat = np.ascontiguousarray(xy.reshape(-1, 2))
+        out = np.empty((flat.shape[0], 2), dtype=np.int64)
+        ox, oy = (float(v) for v in self.grid.origin_m)
+        _coarse_cells(
+            flat, ox, oy, float(self.grid.resolution_m), int(self.grid.shape[0]),
+            int(self.factor), hc, wc, out,
+        )  # fmt: skip
+        return out.reshape((*xy.shape[:-1], 2))
 
     def _centre_rc(self, cells: IntArray) -> FloatArray:
         """The map's (fractional) row and column (..., 2) of coarse cells' centres."""
@@ -295,13 +307,72 @@ def line_of_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
     seg = np.hypot(*(b - a).T)
     n = max(2, math.ceil(float(seg.max()) / (0.5 * cm.cell_m)) + 1)
     s = np.linspace(0.0, 1.0, n)
-    pts = a[:, None] + s[None, :, None] * (b - a)[:, None]
-    rc = cm.cell_of(pts)
-    blocked = cm.opaque[rc[..., 0], rc[..., 1]]
-    along = s[None] * seg[:, None]
-    ends = (along < cm.cell_m) | (along > seg[:, None] - cm.cell_m)
-    out: BoolArray = ~np.any(blocked & ~ends, axis=1)
+    ox, oy = (float(v) for v in cm.grid.origin_m)
+    out = np.empty(len(a), dtype=bool)
+    _sight_kernel(
+        np.ascontiguousarray(a), np.ascontiguousarray(b), s, seg, ox, oy,
+        float(cm.grid.resolution_m), int(cm.grid.shape[0]), int(cm.factor), cm.opaque,
+        float(cm.cell_m), out,
+    )  # fmt: skip
     return out
+
+
+@numba.njit(cache=True)
+def _coarse_cells(
+    xy: FloatArray,
+    ox: float,
+    oy: float,
+    res: float,
+    rows: int,
+    factor: int,
+    hc: int,
+    wc: int,
+    out: IntArray,
+) -> None:  # pragma: no cover - compiled
+    """:meth:`CoarseMap.cell_of` of finite points (M, 2) into ``out`` (M, 2): the map's
+    cell (:meth:`OccupancyGrid.cell_of`'s arithmetic) floored by ``factor``, clipped."""
+    for m in range(xy.shape[0]):
+        col = math.floor((xy[m, 0] - ox) / res) // factor
+        row = (rows - 1 - math.floor((xy[m, 1] - oy) / res)) // factor
+        out[m, 0] = min(max(row, 0), hc - 1)
+        out[m, 1] = min(max(col, 0), wc - 1)
+
+
+@numba.njit(cache=True)
+def _sight_kernel(
+    a: FloatArray,
+    b: FloatArray,
+    s: FloatArray,
+    seg: FloatArray,
+    ox: float,
+    oy: float,
+    res: float,
+    rows: int,
+    factor: int,
+    opaque: BoolArray,
+    cell_m: float,
+    out: BoolArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`line_of_sight`'s samples in one compiled pass, each the array expressions'
+    arithmetic (``a + s (b - a)``, :meth:`CoarseMap.cell_of`: the map's cell floored by
+    ``factor``, clipped), a line stopping at its first opaque sample off the ends."""
+    hc, wc = opaque.shape
+    for m in range(a.shape[0]):
+        dx = b[m, 0] - a[m, 0]
+        dy = b[m, 1] - a[m, 1]
+        clear = True
+        for j in range(s.size):
+            along = s[j] * seg[m]
+            if along < cell_m or along > seg[m] - cell_m:
+                continue  # the cells by either end are not checked
+            col = np.int64(math.floor((a[m, 0] + s[j] * dx - ox) / res))
+            row = rows - 1 - np.int64(math.floor((a[m, 1] + s[j] * dy - oy) / res))
+            r = min(max(row // factor, 0), hc - 1)
+            c = min(max(col // factor, 0), wc - 1)
+            if opaque[r, c]:
+                clear = False
+                break
+        out[m] = clear
 
 
 def clear_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:

@@ -37,6 +37,7 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 from firefleet.perception.thermal._frames import _column_steps, _median3_nearest
+from firefleet.perception.thermal._select import order_pair
 from firefleet.perception.thermal._table import interp_table
 
 __all__ = ["describe_region", "filter_frame", "find_regions", "pairwise_sum"]
@@ -127,8 +128,8 @@ def filter_frame(
 
 
 @numba.njit(cache=True)
-def _running(
-    row: FloatArray,
+def _running_columns(
+    src: FloatArray,
     lo: int,
     size: int,
     use_max: bool,
@@ -137,28 +138,34 @@ def _running(
     g: FloatArray,
     hh: FloatArray,
 ) -> None:  # pragma: no cover - compiled
-    """``out[c]`` = min (or max) of ``row[clip(c + lo .. c + lo + size - 1)]`` (van Herk:
-    running extremes from each block's start ``g`` and to its end ``hh``); ``pad``, ``g``
-    and ``hh`` are work buffers of ``len(row) + size - 1``."""
-    w = row.size
+    """For every row of a frame at once, ``out[c]`` = min (or max) of
+    ``row[clip(c + lo .. c + lo + size - 1)]`` (van Herk: running extremes from each
+    block's start ``g`` and to its end ``hh``). The frame is held transposed (``src``
+    and ``out`` (W, H), the work buffers (W + size - 1, H)): the rows side by side in
+    memory, so that the compiler runs several at a time, each row's minima taken in
+    the order of a row by itself."""
+    w, h = src.shape
     m = w + size - 1
     sign = -1.0 if use_max else 1.0  # a maximum is the minimum of the negated values
     for j in range(m):
-        pad[j] = sign * row[min(max(j + lo, 0), w - 1)]
+        jj = min(max(j + lo, 0), w - 1)
+        for r in range(h):
+            pad[j, r] = sign * src[jj, r]
     for b0 in range(0, m, size):
         b1 = min(b0 + size, m)
-        acc = pad[b0]
-        g[b0] = acc
+        for r in range(h):
+            g[b0, r] = pad[b0, r]
         for j in range(b0 + 1, b1):
-            acc = min(acc, pad[j])
-            g[j] = acc
-        acc = pad[b1 - 1]
-        hh[b1 - 1] = acc
+            for r in range(h):
+                g[j, r] = min(g[j - 1, r], pad[j, r])
+        for r in range(h):
+            hh[b1 - 1, r] = pad[b1 - 1, r]
         for j in range(b1 - 2, b0 - 1, -1):
-            acc = min(acc, pad[j])
-            hh[j] = acc
+            for r in range(h):
+                hh[j, r] = min(hh[j + 1, r], pad[j, r])
     for c in range(w):
-        out[c] = sign * min(hh[c], g[c + size - 1])
+        for r in range(h):
+            out[c, r] = sign * min(hh[c, r], g[c + size - 1, r])
 
 
 @numba.njit(cache=True)
@@ -171,18 +178,29 @@ def find_regions(
     (H, W) int32, per label: top contrast (inf for a fiery one), area [px], bounding
     box ``(r0, c0, r1, c1)``)."""
     h, w = f.shape
-    background = np.median(f)
-    ero = np.empty(w)
-    opened = np.empty((h, w))
+    flat = f.ravel()  # np.median's: the mean of the middle two of an even count
+    lower, upper = order_pair(
+        flat, flat.size, flat.size // 2, np.empty(1024, np.int64), np.empty(flat.size)
+    )
+    background = upper if flat.size % 2 == 1 else (lower + upper) / 2
     lo_e = -(size // 2)
     lo_d = -(size - 1 - size // 2)
-    pad = np.empty(w + size - 1)
-    g = np.empty(w + size - 1)
-    hh = np.empty(w + size - 1)
+    # the opening along each row (erosion, then dilation), all rows at once
+    f_t = np.empty((w, h))
     for r in range(h):
-        _running(f[r], lo_e, size, False, ero, pad, g, hh)
-        _running(ero, lo_d, size, True, opened[r], pad, g, hh)
-    contrast = f - opened
+        for c in range(w):
+            f_t[c, r] = f[r, c]
+    ero = np.empty((w, h))
+    opened_t = np.empty((w, h))
+    pad = np.empty((w + size - 1, h))
+    g = np.empty((w + size - 1, h))
+    hh = np.empty((w + size - 1, h))
+    _running_columns(f_t, lo_e, size, False, ero, pad, g, hh)
+    _running_columns(ero, lo_d, size, True, opened_t, pad, g, hh)
+    contrast = np.empty((h, w))
+    for r in range(h):
+        for c in range(w):
+            contrast[r, c] = f[r, c] - opened_t[c, r]
     low = np.zeros((h, w), dtype=np.bool_)
     for r in range(h):
         for c in range(w):

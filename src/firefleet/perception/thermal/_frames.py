@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from firefleet._typing import FloatArray
 from firefleet.errors import InputError
 from firefleet.perception.thermal._radiometry import LinearCalibration, counts_to_celsius
+from firefleet.perception.thermal._select import order_pair
 
 FRAME_SUFFIXES = (".npy", ".png", ".pgm", ".pnm", ".tif", ".tiff")
 """File types :func:`read_frame` reads."""
@@ -227,32 +228,6 @@ def denoise(
 
 
 @numba.njit(cache=True)
-def _select(buf: FloatArray, m: int, k: int) -> float:  # pragma: no cover - compiled
-    """The ``k``-th smallest of ``buf[:m]`` (Hoare's quickselect, in place: afterwards
-    ``buf[:k]`` holds the ``k`` smallest)."""
-    lo, hi = 0, m - 1
-    while lo < hi:
-        pivot = buf[(lo + hi) // 2]
-        i, j = lo, hi
-        while i <= j:
-            while buf[i] < pivot:
-                i += 1
-            while buf[j] > pivot:
-                j -= 1
-            if i <= j:
-                buf[i], buf[j] = buf[j], buf[i]
-                i += 1
-                j -= 1
-        if k <= j:
-            hi = j
-        elif k >= i:
-            lo = i
-        else:
-            break
-    return float(buf[k])
-
-
-@numba.njit(cache=True)
 def _column_steps(f: FloatArray, max_step: float) -> FloatArray:  # pragma: no cover - compiled
     """Per pair of neighbouring columns, the median of their differences below
     ``max_step`` in magnitude (NumPy's nanmedian of the masked differences: the mean of
@@ -260,6 +235,8 @@ def _column_steps(f: FloatArray, max_step: float) -> FloatArray:  # pragma: no c
     h, w = f.shape
     steps = np.zeros(w - 1)
     buf = np.empty(h)
+    work = np.empty(h)
+    counts = np.empty(16, dtype=np.int64)
     for c in range(w - 1):
         m = 0
         for r in range(h):
@@ -269,15 +246,8 @@ def _column_steps(f: FloatArray, max_step: float) -> FloatArray:  # pragma: no c
                 m += 1
         if m == 0:
             continue
-        k = m // 2
-        upper = _select(buf, m, k)
-        if m % 2 == 1:
-            steps[c] = upper
-        else:
-            lower = buf[0]
-            for i in range(1, k):
-                lower = max(lower, buf[i])
-            steps[c] = 0.5 * (lower + upper)
+        lower, upper = order_pair(buf, m, m // 2, counts, work)  # the middle one or two
+        steps[c] = upper if m % 2 == 1 else 0.5 * (lower + upper)
     return steps
 
 

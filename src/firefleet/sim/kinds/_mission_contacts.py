@@ -102,6 +102,28 @@ class ContactCheck:
             np.fill_diagonal(d, np.inf)
             log["touched_robot"] |= (d < 2 * self.radius_m).any(axis=1)
 
+    def check_ticks(self, log: dict[str, Any], poses: FloatArray) -> None:
+        """:meth:`check` of each tick's poses (m, N, 3) in turn, the candidates of all
+        of them found in one compiled pass (a quiet stretch's ticks)."""
+        xy = np.ascontiguousarray(poses[:, :, :2], dtype=np.float64)
+        m, n = xy.shape[0], xy.shape[1]
+        near = np.empty((m, n), dtype=np.bool_)
+        close = np.empty(m, dtype=np.bool_)
+        ox, oy = self.grid.origin_m
+        _candidates_ticks(
+            xy, float(ox), float(oy), self.grid.resolution_m, self.near_wall, self.radius_m,
+            near, close,
+        )  # fmt: skip
+        for j in np.flatnonzero(near.any(axis=1) | close):
+            if near[j].any():
+                idx = np.flatnonzero(near[j])
+                log["near_wall"].append(np.c_[idx.astype(float), xy[j, idx]])
+            if close[j]:
+                p = xy[j]
+                d = np.hypot(p[None, :, 0] - p[:, None, 0], p[None, :, 1] - p[:, None, 1])
+                np.fill_diagonal(d, np.inf)
+                log["touched_robot"] |= (d < 2 * self.radius_m).any(axis=1)
+
     def final(self, log: dict[str, Any]) -> dict[str, FloatArray]:
         """``near_wall_xy_m`` (M, 3: robot, x [m], y [m]) and ``touched_robot`` (N,)."""
         pts = np.concatenate(log["near_wall"]) if log["near_wall"] else np.zeros((0, 3))
@@ -142,6 +164,23 @@ def _candidates(
             if dx * dx + dy * dy < reach:
                 return True
     return False
+
+
+@numba.njit(cache=True)
+def _candidates_ticks(
+    xy: FloatArray,
+    ox: float,
+    oy: float,
+    res: float,
+    near_wall: BoolArray,
+    radius_m: float,
+    near: BoolArray,
+    close: BoolArray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`_candidates` of each tick's points ``xy[j]`` (m, N, 2): ``near[j]`` (m, N)
+    and ``close[j]`` (m,)."""
+    for j in range(xy.shape[0]):
+        close[j] = _candidates(xy[j], ox, oy, res, near_wall, radius_m, near[j])
 
 
 def touched_walls(

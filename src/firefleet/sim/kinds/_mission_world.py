@@ -408,6 +408,10 @@ class MissionSensors:
         The tick [s].
     rng : numpy.random.Generator
         Thermal noise and the depth noise.
+    scans_in_stretch : bool
+        Whether the range scans due in a quiet stretch are made there (:meth:`skip`),
+        the stretch going on: for a decision that reads the ranges only at ticks that
+        are never quiet (the mission's: at its navigation ticks).
     """
 
     world: MissionWorld
@@ -418,6 +422,7 @@ class MissionSensors:
     rng: np.random.Generator
     depth_noise: float = 0.03
     visible: Any = None  # a stereo-only team's camera (_mission_smoke.VisibleDetector)
+    scans_in_stretch: bool = False  # the range scans inside the quiet stretches (skip)
 
     def quiet_ticks(self, world: MissionWorldState, k: int, dt_s: float, limit: int) -> int:
         """How many of the ticks ``k, k + 1, ...`` (at most ``limit``) read nothing new: no
@@ -426,17 +431,24 @@ class MissionSensors:
         while m < limit and (k + m) % self.every != 0:
             m += 1
         if m and self.ranging is not None:
-            m = min(m, self.ranging.quiet_ticks(m))
+            m = min(m, self.ranging.quiet_ticks(m, self.scans_in_stretch))
         return m
+
+    def quiet_readings(self, readings: Messages) -> Messages:
+        """What :meth:`read` gives at a quiet tick (:meth:`quiet_ticks`) after the tick
+        that read ``readings``: the same ranges (held between scans), air, tanks and
+        damage (the world steps at no quiet tick), no look and no detection."""
+        n = np.shape(readings["looked"])[0]
+        return {**readings, "looked": np.zeros(n), "thermal_detections": np.zeros((0, 5))}
 
     def skip(self, world: MissionWorldState, poses: FloatArray) -> None:
         """What :meth:`read` does at quiet ticks with the true poses (m, N, 3) of each:
-        the range sensors count the ticks, the contact test notes each tick's poses."""
+        the range sensors count the ticks (``scans_in_stretch``: and scan at those due,
+        from those poses), the contact test notes each tick's poses."""
         if self.ranging is not None:
-            self.ranging.skip(poses.shape[0])
+            self.ranging.skip(poses.shape[0], world, poses if self.scans_in_stretch else None)
         if self.world.contacts is not None:
-            for pose in poses:
-                self.world.contacts.check(world.log, pose)
+            self.world.contacts.check_ticks(world.log, poses)
 
     def read(self, world: MissionWorldState, drive: DriveState) -> Messages:
         """Readings at this tick, by name (module notes)."""
@@ -470,7 +482,11 @@ class MissionSensors:
             rng=self.rng,
             scene=SCENE,
         )
-        depth = depth * (1.0 + self.depth_noise * self.rng.standard_normal(depth.shape))
+        noise = self.rng.standard_normal(depth.shape)  # depth * (1 + sigma z), in place
+        noise *= self.depth_noise
+        noise += 1.0
+        noise *= depth
+        depth = noise
         rows: list[list[float]] = []
         for i in range(frames.shape[0]):
             if world.damaged[i]:

@@ -67,6 +67,7 @@ __all__ = [
     "METRIC_NAMES",
     "baseline_burned_area_m2",
     "mission_decide",
+    "mission_held",
     "mission_metrics",
     "mission_world",
 ]
@@ -225,6 +226,9 @@ def mission_stages(scenario: Scenario, decider: Decider, rng: np.random.Generato
         dt_s=scenario.dt_s,
         rng=rng,
         visible=visible,
+        # the tactics read the ranges at their navigation ticks, which are never quiet
+        # (control.mission._quiet): a scan between is no news for the decision
+        scans_in_stretch=True,
     )
     stages: Any = dataclasses.replace  # the Stages fields are typed for the default stages
     out: Stages = stages(
@@ -388,6 +392,20 @@ def mission_quiet_ticks(
     return quiet_ticks(state.tactics, obs, params.tactics, times)
 
 
+def mission_held(state: Any, inputs: DecideInputs) -> WheelCommand | None:
+    """The command of the quiet ticks after a tick that made ``state``
+    (:data:`firefleet.sim.loop.HeldCommand`): the held one with the tanks of ``inputs``
+    (:func:`mission_decide`'s answer when nothing is new); None without a held one."""
+    if not isinstance(state, MissionMemory) or state.held is None:
+        return None
+    held = state.held
+    return WheelCommand(
+        reference_rad_s=held.reference_rad_s,
+        series={**held.series, "tank_l": np.asarray(inputs.readings["tank_l"])},
+        actions=held.actions,
+    )
+
+
 def mission_decide(
     state: Any, inputs: DecideInputs, params: MissionParams, dt_s: float
 ) -> tuple[Any, WheelCommand]:
@@ -523,6 +541,7 @@ KINDS = (
             series=("mode", "spray", "tank_l"),
             uses_estimate=True,
             quiet_ticks=mission_quiet_ticks,
+            held=mission_held,
         ),
         stages=mission_stages,
         list_items=(("victims_found_s", "victim"), ("stereo_victims_found_s", "victim")),
