@@ -22,6 +22,7 @@ from firefleet.control.mission._fight import (
     flame_guard,
 )
 from firefleet.control.mission._hot import probe_estimate
+from firefleet.control.mission._keepout import heat_costmap
 from firefleet.control.mission._knowledge import fires_of, update_knowledge, watch_victims
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -95,7 +96,7 @@ def _plan(
     params: TacticsParams,
 ) -> TacticsState:
     """Allocate fires and victims, then frontiers to the robots left (``_plan`` notes)."""
-    state = fire_costmap(state, pose, params)
+    state = heat_costmap(fire_costmap(state, pose, params), params)
     n = len(pose)
     k = state.knowledge
     ids, fxy, fext = fires_of(k)

@@ -10,6 +10,7 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 from firefleet.control.navigation._dwa import dwa_command
+from firefleet.control.navigation._makeway import clear_of, price
 from firefleet.control.navigation._team import (
     _SAMPLE_M,
     NavigationInputs,
@@ -102,21 +103,6 @@ def _conflict(
     return False, in_way
 
 
-@numba.njit(cache=True)
-def _clear_of(
-    xy: FloatArray, pts: FloatArray, limit: float
-) -> np.ndarray:  # pragma: no cover - compiled
-    """Whether each point of ``xy`` (C, 2) lies farther than ``limit`` from every point
-    of ``pts`` (P, 2) (all True for no points)."""
-    keep = np.ones(xy.shape[0], dtype=np.bool_)
-    for c in range(xy.shape[0]):
-        for j in range(pts.shape[0]):
-            if not np.hypot(xy[c, 0] - pts[j, 0], xy[c, 1] - pts[j, 1]) > limit:
-                keep[c] = False
-                break
-    return keep
-
-
 def _aside_spot(
     state: NavigationState,
     params: NavigationParams,
@@ -140,9 +126,14 @@ def _aside_spot(
     cells = np.argwhere(~state.costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
     if len(cells) == 0:
         return None
+    # unpriced cells only where there are any (the mission prices the cells by fires
+    # and hot places: a spot out of a teammate's way must not be in the fire's gas)
+    cheap = price(state.costmap, params, cells)
+    if (cheap <= 0.0).any():
+        cells = cells[cheap <= 0.0]
     xy = grid.center_of(cells)
     limit = gap + params.goal_tolerance_m + 0.1
-    keep = _clear_of(xy, np.ascontiguousarray(rest, dtype=float), limit) & _clear_of(
+    keep = clear_of(xy, np.ascontiguousarray(rest, dtype=float), limit) & clear_of(
         xy, np.ascontiguousarray(np.delete(mates, i, axis=0), dtype=float), limit
     )
     xy = xy[keep]

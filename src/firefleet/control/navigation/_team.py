@@ -269,7 +269,9 @@ def _with_teammates(
 ) -> Costmap:
     """The static costmap with the teammates' discs on it as walls.
 
-    Exactly :func:`build_costmap` of the map with the discs' cells occupied, computed
+    Exactly :func:`build_costmap` of the map with the discs' cells occupied, plus the
+    price the static costmap adds to its cells beyond their walls' (the fires' and the
+    hot places' on the mission: a re-plan round a teammate must not lose it), computed
     only in a window about each disc (a disc lowers the clearance of the cells near it
     and nowhere else; the window reaches ``inflation + 20 wall_decay_m`` past the disc,
     where the disc's wall cost is below ``wall_weight * 2e-9``): O(window) per teammate
@@ -302,15 +304,29 @@ def _with_teammates(
     blocked = clearance <= params.inflation_m
     for r0, r1, c0, c1 in windows:
         cw = clearance[r0:r1, c0:c1]
-        with np.errstate(over="ignore"):
-            extra = params.wall_weight * np.exp(
-                -(np.minimum(cw, 1e9) - params.inflation_m) / params.wall_decay_m
-            )
-        cost[r0:r1, c0:c1] = np.where(blocked[r0:r1, c0:c1], np.inf, 1.0 + extra)
+        # the window's wall cost anew; any cost the static map adds besides its walls
+        # (the fires' and hot places' price, ``heat_costmap``) is kept
+        base = static.cost[r0:r1, c0:c1]
+        add = base - 1.0 - _wall_extra(static.clearance_m[r0:r1, c0:c1], params)
+        add = np.where(np.isfinite(base) & (add > 1e-9), add, 0.0)
+        cost[r0:r1, c0:c1] = np.where(
+            blocked[r0:r1, c0:c1] | ~np.isfinite(base),
+            np.inf,
+            1.0 + _wall_extra(cw, params) + add,
+        )
     teamed = OccupancyGrid(occ, grid.free & ~occ, grid.resolution_m, grid.origin_m, grid.name)
     for arr in (clearance, blocked, cost):
         arr.setflags(write=False)
     return Costmap(teamed, clearance, blocked, cost, float(params.inflation_m))
+
+
+def _wall_extra(clearance_m: FloatArray, params: NavigationParams) -> FloatArray:
+    """The wall cost per metre above 1 at a clearance (:func:`build_costmap`'s)."""
+    with np.errstate(over="ignore"):
+        out: FloatArray = params.wall_weight * np.exp(
+            -(np.minimum(clearance_m, 1e9) - params.inflation_m) / params.wall_decay_m
+        )
+    return out
 
 
 def _wall_points(grid: OccupancyGrid) -> FloatArray:
