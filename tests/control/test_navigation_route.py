@@ -8,12 +8,19 @@ import numpy as np
 
 from firefleet.control.navigation import (
     Costmap,
+    NavigationInputs,
     NavigationParams,
+    astar_cells,
     build_costmap,
     navigation_init,
+    navigation_step,
 )
+from firefleet.control.navigation._makeway import cuts_path
 from firefleet.control.navigation._team import _with_teammates
+from firefleet.models import unicycle_step
 from firefleet.world import OccupancyGrid
+
+from ._nav_loop import lidar
 
 
 def _walled(h: int, w: int) -> np.ndarray:
@@ -56,3 +63,75 @@ def test_teammates_discs_keep_the_price_of_a_priced_costmap() -> None:
     open_ = ~ref.blocked
     assert np.allclose(got.cost[open_], want[open_], rtol=0.0, atol=1e-9)
     assert np.isinf(got.cost[~open_]).all()
+
+
+def _passage(width_m: float = 1.0, res: float = 0.05) -> OccupancyGrid:
+    """8 m x 3 m, walled, with one straight passage ``width_m`` wide along y = 1.5 m."""
+    h, w = round(3.0 / res), round(8.0 / res)
+    occ = _walled(h, w)
+    half, mid = round(width_m / 2 / res), h // 2
+    occ[1 : mid - half] = True
+    occ[mid + half : -1] = True
+    return OccupancyGrid(occ, ~occ, res)
+
+
+def _drive(
+    grid: OccupancyGrid, pose: np.ndarray, goals: np.ndarray, movable: np.ndarray, steps: int
+) -> tuple[np.ndarray, float, list[tuple[str, ...]]]:
+    params = NavigationParams()
+    state = navigation_init(grid, pose, goals, params)
+    least = np.inf
+    seen = []
+    for k in range(steps):
+        ranges, bearings = lidar(grid, pose, params.robot_radius_m)
+        inputs = NavigationInputs(
+            pose.copy(), {"lidar": (ranges, bearings)}, pose[:, :2].copy(), k * 0.1, movable
+        )
+        state, v, w = navigation_step(state, inputs, params, 0.1)
+        pose = unicycle_step(pose, v, w, 0.1)
+        least = min(least, float(np.hypot(*(pose[0, :2] - pose[1, :2]))))
+        seen.append(state.status)
+        if state.status == ("arrived", "arrived") and not state.parked.any():  # type: ignore[union-attr]
+            break
+    return pose, least, seen
+
+
+def test_a_robot_standing_in_a_1_m_passage_makes_way_and_goes_back() -> None:
+    # robot 0 stands in the middle of the passage; robot 1 must pass it. With two radii
+    # and the margins there is no room beside it: it moves to the passage's wall, the
+    # other passes, and it goes back to its goal
+    grid = _passage(1.0)
+    pose = np.array([[4.0, 1.5, 0.0], [0.8, 1.5, 0.0]])
+    goals = np.array([[4.0, 1.5], [7.2, 1.5]])
+    params = NavigationParams()
+    end, least, seen = _drive(grid, pose, goals, np.array([True, True]), 400)
+    assert seen[-1] == ("arrived", "arrived")
+    assert np.hypot(*(end[1, :2] - goals[1])) <= params.goal_tolerance_m
+    assert np.hypot(*(end[0, :2] - goals[0])) <= params.goal_tolerance_m
+    assert any(s[0] == "moving" for s in seen)  # it did move
+    assert least > 2.0 * params.robot_radius_m  # no contact
+    # a robot not marked movable stands for good: the other never gets past
+    end, _, seen = _drive(grid, pose, goals, np.array([False, True]), 300)
+    assert seen[-1][1] != "arrived"
+    assert end[1, 0] < 4.0
+    assert np.allclose(end[0, :2], pose[0, :2])
+
+
+def test_cuts_path_agrees_with_a_plan_round_the_disc() -> None:
+    # brute force: the way past a standing disc exists iff A* finds a path on the
+    # costmap with the disc's cells occupied (the window holds the whole passage here)
+    grid = _passage(1.0, res=0.05)
+    params = NavigationParams()
+    cm = build_costmap(grid, params.inflation_m)
+    path = np.stack([np.linspace(3.0, 5.0, 41), np.full(41, 1.5)], axis=1)
+    block = params.robot_radius_m + params.inflation_m
+    for y in np.arange(1.2, 1.81, 0.05):
+        xy = np.array([4.0, y])
+        centres = grid.center_of(np.argwhere(np.ones(grid.shape, dtype=bool))).reshape(
+            *grid.shape, 2
+        )
+        disc = np.hypot(centres[..., 0] - xy[0], centres[..., 1] - xy[1]) <= block
+        cost = np.where(cm.blocked | disc, np.inf, 1.0)
+        start, goal = tuple(grid.cell_of(path[0])), tuple(grid.cell_of(path[-1]))
+        cells, _ = astar_cells(cost, start, goal, grid.resolution_m)
+        assert cuts_path(cm, xy, block, path) == (cells is None), y

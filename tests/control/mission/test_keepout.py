@@ -51,3 +51,29 @@ def test_live_hot_places_are_priced_and_paths_go_round_them() -> None:
     # every place forgotten: the costmap as it was
     state = replace(state, t_s=200.0)
     assert heat_costmap(state, params).nav.costmap is base
+
+
+def test_a_teammate_that_makes_way_does_not_block_the_explorers_travel() -> None:
+    """A 0.5 m passage with a teammate in its middle: blocking, the candidates beyond it
+    are out of reach; marked passable (it stands and makes way), the travel equals the
+    travel with no teammate there at all."""
+    from firefleet.control.mission._coverage import coarse_map
+    from firefleet.control.mission._explore import _travel
+    from firefleet.control.mission._views import view_table
+    from firefleet.control.navigation import build_costmap
+
+    occ = np.ones((40, 200), bool)
+    occ[15:25, 2:198] = False
+    cm = coarse_map(build_costmap(OccupancyGrid(occ, ~occ, 0.05), 0.2), 0.25)
+    table = view_table(cm, 4.0, 2.0)
+    start = np.array([[1.0, 1.0]])
+    mates = np.array([[1.0, 1.0], [5.0, 1.0]])
+    away = np.array([[1.0, 1.0], [105.0, 1.0]])
+    who = np.array([0])
+    alone = _travel(cm, table, start, away, who, 0.35, np.inf)
+    blocked = _travel(cm, table, start, mates, who, 0.35, np.inf, np.array([True, True]))
+    passing = _travel(cm, table, start, mates, who, 0.35, np.inf, np.array([True, False]))
+    x = table.xy_m[:, 0]
+    assert np.isinf(blocked[0, x > 5.5]).all()
+    assert np.array_equal(passing, alone)
+    assert np.isfinite(passing).all()

@@ -32,9 +32,15 @@ from scipy import ndimage
 
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.navigation._costmap import Costmap
-from firefleet.control.navigation._team import NavigationParams, _wall_extra
+from firefleet.control.navigation._team import (
+    NavigationParams,
+    NavigationState,
+    _plan,
+    _wall_extra,
+    _with_teammates,
+)
 
-__all__ = ["clear_of", "cuts_path", "passed", "price"]
+__all__ = ["clear_of", "cuts_path", "make_way_spot", "passed", "price"]
 
 _WINDOW_M = 1.5
 """Half the side of the window the way past a standing robot is judged in [m]."""
@@ -126,3 +132,74 @@ def passed(mover_rest_xy_m: FloatArray, home_xy_m: FloatArray, limit_m: float) -
         return True
     d = np.hypot(pts[:, 0] - home_xy_m[0], pts[:, 1] - home_xy_m[1])
     return bool(d.min() > limit_m)
+
+
+def make_way_spot(
+    state: NavigationState,
+    params: NavigationParams,
+    pose: FloatArray,
+    mates: FloatArray,
+    j: int,
+    i: int,
+    rest: FloatArray,
+) -> FloatArray | None:
+    """Where standing robot ``j`` makes way for mover ``i`` (module notes), whose
+    position and remaining path are ``rest`` (K, 2) [m]; None if there is no spot.
+
+    The candidates are the open cells within ``make_way_reach_m`` of ``j`` (unpriced
+    where there are any), nearest first: the nearest that keeps the gap + the goal
+    tolerance + 0.1 m from ``rest`` and from every other robot, and the nearest few
+    (within 1 m) that leave ``i`` a way past (:func:`cuts_path`), kept gap + tolerance
+    from every other robot; of these the nearer that ``j`` can reach round ``i``."""
+    grid = state.costmap.grid
+    gap = 2.0 * params.robot_radius_m + params.margin_m
+    limit = gap + params.goal_tolerance_m + 0.1
+    reach = round(params.make_way_reach_m / grid.resolution_m)
+    rc = grid.cell_of(pose[j, :2])
+    h, w = grid.shape
+    r0, r1 = max(rc[0] - reach, 0), min(rc[0] + reach + 1, h)
+    c0, c1 = max(rc[1] - reach, 0), min(rc[1] + reach + 1, w)
+    cells = np.argwhere(~state.costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
+    if len(cells) == 0:
+        return None
+    cheap = price(state.costmap, params, cells)
+    if (cheap <= 0.0).any():
+        cells = cells[cheap <= 0.0]
+    xy = grid.center_of(cells)
+    dist = np.hypot(xy[:, 0] - pose[j, 0], xy[:, 1] - pose[j, 1])
+    keep = dist <= params.make_way_reach_m
+    xy, dist = xy[keep], dist[keep]
+    others = np.ascontiguousarray(np.delete(mates, [i, j], axis=0), dtype=float)
+    near_ok = clear_of(np.ascontiguousarray(xy), others, limit)
+    xy, dist = xy[near_ok], dist[near_ok]
+    if len(xy) == 0:
+        return None
+    order = np.argsort(dist)
+    xy, dist = xy[order], dist[order]
+    tries: list[FloatArray] = []
+    clear = np.flatnonzero(clear_of(xy, np.ascontiguousarray(rest, dtype=float), limit))
+    if len(clear):
+        tries.append(xy[clear[0]])
+    # by a wall (the planner's least clearance and two cells more), leaving the mover
+    # a way past with a cell to spare
+    res = grid.resolution_m
+    block = params.robot_radius_m + params.inflation_m + res
+    clear_m = state.costmap.clearance_m[tuple(grid.cell_of(xy).T)]
+    side = 0
+    for k in np.flatnonzero((dist <= 1.0) & (clear_m <= params.inflation_m + 2.0 * res)):
+        if side >= 12:
+            break
+        if np.hypot(*(xy[k] - pose[i, :2])) <= limit:
+            continue
+        side += 1
+        if not cuts_path(state.costmap, xy[k], block, rest):
+            tries.insert(0, xy[k])
+            break
+    if not tries:
+        return None
+    costmap = _with_teammates(state, params, mates[i : i + 1])
+    for spot in sorted(tries, key=lambda s: float(np.hypot(*(s - pose[j, :2])))):
+        status, _ = _plan(costmap, pose[j, :2], spot, params)
+        if status == "moving":
+            return np.asarray(spot)
+    return None

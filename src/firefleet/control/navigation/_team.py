@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from firefleet._typing import FloatArray, IntArray
+from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.navigation._astar import astar
 from firefleet.control.navigation._costmap import Costmap, build_costmap
 from firefleet.control.navigation._dwa import DwaParams
@@ -102,6 +102,9 @@ class NavigationParams:
         How much of their paths ahead two robots compare for a conflict [m].
     controller : PathFollowingController
         The deliverable's fuzzy path follower.
+    make_way_reach_m : float
+        How far from where it stands a robot looks for a spot out of a moving
+        teammate's way [m] (``_makeway``; only robots the inputs mark ``movable``).
     """
 
     robot_radius_m: float = 0.15
@@ -117,6 +120,7 @@ class NavigationParams:
     replan_offset_m: float = 0.5
     yield_distance_m: float = 2.0
     controller: PathFollowingController = field(default_factory=PathFollowingController.builtin)
+    make_way_reach_m: float = 4.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -130,6 +134,7 @@ class NavigationParams:
                 "stuck_time_s",
                 "replan_offset_m",
                 "yield_distance_m",
+                "make_way_reach_m",
             ),
         )
         if self.margin_m < 0 or self.corner_radius_m < 0 or self.wall_weight < 0:
@@ -157,12 +162,16 @@ class NavigationInputs:
         Every robot's position as the team received it [m].
     t_s : float
         Time [s].
+    movable : ndarray of bool, shape (N,), or None
+        Robots that may be asked to make way for a moving teammate while they stand
+        (arrived; ``_makeway``); None: none (an arrived robot stops for good).
     """
 
     pose: FloatArray
     ranges: Mapping[str, tuple[ArrayLike, ArrayLike]]
     teammates_xy_m: FloatArray
     t_s: float
+    movable: BoolArray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,6 +213,12 @@ class NavigationState:
     wall_tree : scipy.spatial.cKDTree or None
         A k-d tree of ``wall_points_m`` (built once; finds the walls near each robot in
         O(log K) instead of a scan of every wall cell), None to scan.
+    parked : ndarray of bool, shape (N,), or None
+        Robots that stood and make way for ``aside_of`` (they go back to their goal once
+        it has passed; ``_makeway``); None: none.
+    asked_s : ndarray, shape (N,), or None
+        When each standing robot was last found no spot to make way to [s] (it is not
+        asked again within ``stuck_time_s``); None: never.
     """
 
     costmap: Costmap
@@ -222,6 +237,8 @@ class NavigationState:
     target_m: FloatArray
     aside_of: IntArray
     wall_tree: cKDTree | None = None
+    parked: BoolArray | None = None
+    asked_s: FloatArray | None = None
 
     @property
     def arrived(self) -> FloatArray:
@@ -401,6 +418,8 @@ def navigation_init(
         target_m=g.copy(),
         aside_of=np.full(n, -1, dtype=np.int64),
         wall_tree=cKDTree(walls) if len(walls) else None,
+        parked=np.zeros(n, dtype=bool),
+        asked_s=np.full(n, -math.inf),
     )
 
 
@@ -476,8 +495,11 @@ def navigation_retarget(
     stuck[mask] = 0
     aside = state.aside_of.copy()
     aside[mask] = -1
+    parked = np.zeros(n, dtype=bool) if state.parked is None else state.parked.copy()
+    parked[mask] = False
     return replace(
         state,
+        parked=parked,
         goals_m=goals,
         target_m=target,
         status=tuple(status),
