@@ -135,3 +135,31 @@ def test_cuts_path_agrees_with_a_plan_round_the_disc() -> None:
         start, goal = tuple(grid.cell_of(path[0])), tuple(grid.cell_of(path[-1]))
         cells, _ = astar_cells(cost, start, goal, grid.resolution_m)
         assert cuts_path(cm, xy, block, path) == (cells is None), y
+
+
+def test_the_maps_outside_is_a_wall_to_the_dynamic_window() -> None:
+    # brute force: every cell of the map grown by one cell round it that is not free
+    # (the outside never is) and has a free 4-neighbour, at its centre
+    from firefleet.control.navigation._team import _wall_points
+
+    occ = _walled(12, 16)
+    occ[0, 5:9] = False  # a door in the map's top edge
+    occ[4:8, 15] = False  # and one in its right edge
+    grid = OccupancyGrid(occ, ~occ, 0.1, origin_m=(1.0, -2.0))
+    h, w = occ.shape
+    want = set()
+    for r in range(-1, h + 1):
+        for c in range(-1, w + 1):
+            inside = 0 <= r < h and 0 <= c < w
+            if inside and not occ[r, c]:
+                continue
+            for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+                rr, cc = r + dr, c + dc
+                if 0 <= rr < h and 0 <= cc < w and not occ[rr, cc]:
+                    x = 1.0 + (c + 0.5) * 0.1
+                    y = -2.0 + (h - r - 0.5) * 0.1
+                    want.add((round(x, 9), round(y, 9)))
+                    break
+    got = {(round(x, 9), round(y, 9)) for x, y in _wall_points(grid)}
+    assert got == want
+    assert (round(1.0 + 6.5 * 0.1, 9), round(-2.0 + 12.5 * 0.1, 9)) in got  # past the door

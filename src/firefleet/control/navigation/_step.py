@@ -411,9 +411,7 @@ def navigation_step(
             [
                 np.zeros((len(act), points.shape[1])),
                 np.full(walls.shape[:2], wall_radius),
-                # the teammates' discs grown by the margin: their positions are
-                # estimates too (mission-large: two robots came within 0.303 m)
-                np.full((len(act), n), params.robot_radius_m + params.margin_m),
+                np.full((len(act), n), params.robot_radius_m),
             ],
             axis=1,
         )

@@ -347,11 +347,14 @@ def _wall_extra(clearance_m: FloatArray, params: NavigationParams) -> FloatArray
 
 
 def _wall_points(grid: OccupancyGrid) -> FloatArray:
-    """Centres of the non-free cells with a free 4-neighbour, (K, 2) [m]."""
-    free = np.asarray(grid.free)
+    """Centres of the non-free cells with a free 4-neighbour, (K, 2) [m], the map's
+    outside counting as non-free (the costmap and the collision metric count it so: a
+    door in the map's edge is no way out; mission-house: a fighter drove 3 cm past the
+    front door's edge, off the map)."""
+    free = np.pad(np.asarray(grid.free), 1, constant_values=False)
     padded = np.pad(free, 1, constant_values=False)
     touches = padded[:-2, 1:-1] | padded[2:, 1:-1] | padded[1:-1, :-2] | padded[1:-1, 2:]
-    return np.asarray(grid.center_of(np.argwhere(~free & touches)))
+    return np.asarray(grid.center_of(np.argwhere(~free & touches) - 1))
 
 
 def navigation_init(
