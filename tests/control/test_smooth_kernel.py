@@ -75,7 +75,7 @@ def test_give_way_conflict_equals_numpy() -> None:
 
 
 def test_aside_clearance_filter_equals_numpy() -> None:
-    from firefleet.control.navigation._step import _clear_of
+    from firefleet.control.navigation._makeway import clear_of as _clear_of
 
     rng = np.random.default_rng(2)
     for _ in range(50):

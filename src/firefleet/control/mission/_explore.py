@@ -11,7 +11,10 @@ no path passing a teammate closer than ``2 robot_radius_m + margin_m`` (in a pas
 too narrow to pass, the floor beyond a teammate is not a robot's to choose: on the maze
 three robots that chose across each other in a 1 m passage stood locked for 200 s, and
 with such paths priced 10 m more, two followed the third into the passage and stood
-locked behind it for 40 s).
+locked behind it for 40 s). A teammate that stands and makes way (a fighter, a
+refiller, one idle or watching a victim: ``passable``) does not block the way: on the
+maze two fighters stood in the 1 m passage that is the only way into the south half, and
+the explorer, who never chose beyond them, covered 25 % of the floor.
 A viewpoint never lies in ``avoid`` (cells found unreachable, the surroundings of a
 known fire).
 """
@@ -71,19 +74,22 @@ def _travel(
     who: IntArray,
     block_m: float,
     limit_m: float,
+    blockers: BoolArray | None = None,
 ) -> FloatArray:
     """Travel [m] of robots ``who`` (R,) from their points (R, 2) to every candidate,
     (R, C) (``inf``: past the limit or unreachable), on the graph where no path passes
     through a cell within ``block_m`` of a teammate (``mates_xy_m`` (N, 2), the robot
     itself excepted): in a passage too narrow to pass, the floor beyond a teammate is
     not a robot's to choose (it chooses elsewhere, or waits until the teammate has
-    gone on)."""
+    gone on). Only the teammates marked in ``blockers`` (N,) count (None: all)."""
     graph = cm.graph
+    n_mates = len(mates_xy_m)
+    counts = np.ones(n_mates, dtype=bool) if blockers is None else np.asarray(blockers, bool)
     nodes = cm.node_of(xy_m)
     out = np.empty((len(nodes), len(table)))
     ptr = graph.indptr
     for j, i in enumerate(np.asarray(who).tolist()):
-        others = np.delete(mates_xy_m, i, axis=0)
+        others = mates_xy_m[counts & (np.arange(n_mates) != i)]
         blocked = _blocked_nodes(cm, others, block_m)
         blocked = blocked[blocked != nodes[j]]
         g = graph
@@ -108,6 +114,7 @@ def explore_views(
     there: BoolArray,
     avoid: BoolArray,
     params: TacticsParams,
+    passable: BoolArray | None = None,
 ) -> IntArray:
     """Each explorer's viewpoint cell (N, 2) (-1: none worth a trip; module notes).
 
@@ -126,6 +133,9 @@ def explore_views(
     avoid : ndarray of bool, shape (Hc, Wc)
         Cells no viewpoint may be.
     params : TacticsParams
+    passable : ndarray of bool, shape (N,), or None
+        Teammates a path may pass: they stand and make way for a robot that needs
+        the place (the navigation's ``movable``, ``_makeway``); None: none.
     """
     n = len(pose)
     out = np.full((n, 2), -1, dtype=np.int64)
@@ -158,7 +168,8 @@ def explore_views(
     who = np.asarray(choose, dtype=np.int64)
     block = 2.0 * params.nav.robot_radius_m + params.nav.margin_m
     mates = pose[:, :2]
-    travel = _travel(cm, table, pose[who, :2], mates, who, block, params.travel_limit_m)
+    blockers = None if passable is None else ~np.asarray(passable, dtype=bool)
+    travel = _travel(cm, table, pose[who, :2], mates, who, block, params.travel_limit_m, blockers)
     speed = params.nav.dwa.v_max_m_s
     turn_s = np.pi / params.scan_omega_rad_s
     args = (table, weight, travel, allowed, np.asarray(held, dtype=np.int64), speed, turn_s)
@@ -166,7 +177,9 @@ def explore_views(
     lost = np.flatnonzero(pick < 0)
     if len(lost):  # nothing worth a trip nearby: search the whole map for them
         whole = travel.copy()
-        whole[lost] = _travel(cm, table, pose[who[lost], :2], mates, who[lost], block, np.inf)
+        whole[lost] = _travel(
+            cm, table, pose[who[lost], :2], mates, who[lost], block, np.inf, blockers
+        )
         pick = choose_views(table, weight, whole, allowed, *args[4:], params.view_min_m2)
     got = pick >= 0
     rc = np.stack(np.divmod(table.cand[pick[got]], cm.shape[1]), axis=-1)

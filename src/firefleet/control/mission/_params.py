@@ -186,6 +186,11 @@ class TacticsParams:
         The air probe's time constant [s] (the kind's default PT100: 10 s): a robot
         retreats when its reading plus this times the reading's rise per second
         reaches ``retreat_c`` (:func:`._hot.probe_estimate`).
+    hot_keepout_m : float
+        Paths are priced ``hot_cost`` more per metre within this distance of a live hot
+        place [m] (:mod:`._keepout`; 0: not at all).
+    hot_cost : float
+        That price per metre (the map's free cells cost 1 per metre).
     """
 
     standoff_m: float = 1.5
@@ -250,6 +255,9 @@ class TacticsParams:
     scout_near_m: float = 1.5
     scout_far_m: float = 3.0
     probe_lag_s: float = 10.0
+    # route
+    hot_keepout_m: float = 1.0
+    hot_cost: float = 20.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -316,6 +324,8 @@ class TacticsParams:
             positive=("confirm_watch_s",),
             non_negative=("person_wall_m",),
         )
+        # route
+        check_fields(self, "tactics", non_negative=("hot_keepout_m", "hot_cost"))
         for name in (
             "confirm_repeats",
             "fire_out_looks",

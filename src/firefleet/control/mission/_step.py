@@ -22,6 +22,7 @@ from firefleet.control.mission._fight import (
     flame_guard,
 )
 from firefleet.control.mission._hot import probe_estimate
+from firefleet.control.mission._keepout import heat_costmap
 from firefleet.control.mission._knowledge import fires_of, update_knowledge, watch_victims
 from firefleet.control.mission._params import (
     CONFIRM,
@@ -95,7 +96,7 @@ def _plan(
     params: TacticsParams,
 ) -> TacticsState:
     """Allocate fires and victims, then frontiers to the robots left (``_plan`` notes)."""
-    state = fire_costmap(state, pose, params)
+    state = heat_costmap(fire_costmap(state, pose, params), params)
     n = len(pose)
     k = state.knowledge
     ids, fxy, fext = fires_of(k)
@@ -165,9 +166,10 @@ def _plan(
     going = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
     there = np.array([s == "arrived" for s in status]) & (state.mode == EXPLORE)
     hot = _near_fire(cm, k.spot_xy_m, params.explore_fire_m)
+    standing = np.array([s == "arrived" for s in status]) & working & (mode != EXPLORE)
     cells = explore_views(
         cm, state.covered_coarse, pose, free, state.explore_cell, going, there,
-        state.excluded | hot, params,
+        state.excluded | hot, params, standing & (mode != DAMAGED),
     )  # fmt: skip
     has = free & (cells[:, 0] >= 0)
     same = has & np.all(cells == state.explore_cell, axis=1) & (going | there)
@@ -194,9 +196,13 @@ def _orders(
 ) -> TacticsState:
     """Run the navigation controller and turn its commands into the team's orders."""
     n = len(pose)
-    inputs = NavigationInputs(pose=pose, ranges=obs.ranges, teammates_xy_m=pose[:, :2], t_s=obs.t_s)
+    movable = np.asarray(obs.alive, dtype=bool) & ~np.asarray(obs.damaged, dtype=bool)
+    inputs = NavigationInputs(
+        pose, obs.ranges, pose[:, :2], obs.t_s, movable & (state.mode != DAMAGED)
+    )
     nav, v, w = navigation_step(state.nav, inputs, params.nav, params.nav_period_s)
     mode = state.mode
+    aside = nav.parked if nav.parked is not None else np.zeros(n, dtype=bool)  # making way
     # arrived, or stopped short for good (its goal blocked or out of reach)
     at_goal = np.array([s != "moving" and s != "waiting" for s in nav.status])
     arrived = at_goal
@@ -211,6 +217,7 @@ def _orders(
             | ((mode == REFILL) & (d_goal <= params.refill_radius_m))
         )
         & ~at_goal
+        & ~aside
         & (obs.t_s - state.closest_s >= params.stall_s)
     )
     w_max = params.nav.dwa.omega_max_rad_s
@@ -248,7 +255,8 @@ def _orders(
                 shot_s[i] = obs.t_s
                 # held up on its way (no closer in the navigation's stuck time) with a
                 # shot already: it stops there and sprays
-                if not at_goal[i] and obs.t_s - state.closest_s[i] >= params.nav.stuck_time_s:
+                stood = obs.t_s - state.closest_s[i] >= params.nav.stuck_time_s
+                if not at_goal[i] and not aside[i] and stood:
                     settle[i] = True
         else:
             target = fxy[int(j[0])]
@@ -293,13 +301,13 @@ def _orders(
         nav = navigation_retarget(nav, pose[:, :2], settle)
         at_goal = at_goal | settle
     # a fighter that has stood without a shot for reslot_s gets a new slot (next plan)
-    reslot = (mode == FIGHT) & at_goal & (obs.t_s - shot_s >= params.reslot_s)
+    reslot = (mode == FIGHT) & at_goal & ~aside & (obs.t_s - shot_s >= params.reslot_s)
     if reslot.any():
         goals = goals.copy()
         goals[reslot] = np.nan
         shot_s[reslot] = obs.t_s
         pending = True
-    watching = np.flatnonzero((mode == CONFIRM) & at_goal)
+    watching = np.flatnonzero((mode == CONFIRM) & at_goal & ~aside)
     for i in map(int, watching):
         vic = k.victim_xy_m[state.task_victim[i]]
         err = float(_wrap(np.arctan2(vic[1] - pose[i, 1], vic[0] - pose[i, 0]) - pose[i, 2]))
@@ -328,7 +336,7 @@ def _orders(
     spot_i = np.clip(state.refill_spot, 0, len(spots_r) - 1)
     off = np.hypot(*(spots_r[spot_i] - spots_r[0]).T)
     refilling = (mode == REFILL) & at_goal & (d_goal + off <= params.refill_radius_m)
-    stop = (mode == DAMAGED) | refilling | (mode == IDLE)
+    stop = (mode == DAMAGED) | refilling | ((mode == IDLE) & ~aside)
     v[stop] = 0.0
     w[stop] = 0.0
     flames = dry_flames(state, params)  # soaked: the way in once the door's flames are out

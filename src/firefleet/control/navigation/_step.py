@@ -10,6 +10,13 @@ import numpy as np
 
 from firefleet._typing import FloatArray
 from firefleet.control.navigation._dwa import dwa_command
+from firefleet.control.navigation._makeway import (
+    clear_of,
+    cuts_path,
+    make_way_spot,
+    passed,
+    price,
+)
 from firefleet.control.navigation._team import (
     _SAMPLE_M,
     NavigationInputs,
@@ -21,6 +28,7 @@ from firefleet.control.navigation._team import (
 )
 from firefleet.control.path_following import controller_inputs
 from firefleet.errors import InputError, as_float_array
+from firefleet.planning.planar import PlanarPath
 
 __all__ = ["navigation_step"]
 
@@ -102,21 +110,6 @@ def _conflict(
     return False, in_way
 
 
-@numba.njit(cache=True)
-def _clear_of(
-    xy: FloatArray, pts: FloatArray, limit: float
-) -> np.ndarray:  # pragma: no cover - compiled
-    """Whether each point of ``xy`` (C, 2) lies farther than ``limit`` from every point
-    of ``pts`` (P, 2) (all True for no points)."""
-    keep = np.ones(xy.shape[0], dtype=np.bool_)
-    for c in range(xy.shape[0]):
-        for j in range(pts.shape[0]):
-            if not np.hypot(xy[c, 0] - pts[j, 0], xy[c, 1] - pts[j, 1]) > limit:
-                keep[c] = False
-                break
-    return keep
-
-
 def _aside_spot(
     state: NavigationState,
     params: NavigationParams,
@@ -140,9 +133,14 @@ def _aside_spot(
     cells = np.argwhere(~state.costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
     if len(cells) == 0:
         return None
+    # unpriced cells only where there are any (the mission prices the cells by fires
+    # and hot places: a spot out of a teammate's way must not be in the fire's gas)
+    cheap = price(state.costmap, params, cells)
+    if (cheap <= 0.0).any():
+        cells = cells[cheap <= 0.0]
     xy = grid.center_of(cells)
     limit = gap + params.goal_tolerance_m + 0.1
-    keep = _clear_of(xy, np.ascontiguousarray(rest, dtype=float), limit) & _clear_of(
+    keep = clear_of(xy, np.ascontiguousarray(rest, dtype=float), limit) & clear_of(
         xy, np.ascontiguousarray(np.delete(mates, i, axis=0), dtype=float), limit
     )
     xy = xy[keep]
@@ -216,6 +214,15 @@ def navigation_step(
     index = np.zeros(n, dtype=np.int64)
     target = state.target_m.copy()
     aside = state.aside_of.copy()
+    parked = np.zeros(n, dtype=bool) if state.parked is None else state.parked.copy()
+    asked = np.full(n, -math.inf) if state.asked_s is None else state.asked_s.copy()
+    movable = np.zeros(n, dtype=bool)
+    if inputs.movable is not None:
+        movable = np.asarray(inputs.movable, dtype=bool).reshape(-1)
+        if movable.shape != (n,):
+            raise InputError(f"inputs.movable must be {n} booleans, got shape {movable.shape}")
+    gap = 2.0 * params.robot_radius_m + params.margin_m
+    limit = gap + params.goal_tolerance_m + 0.1
 
     def replan(i: int, with_mates: bool) -> None:
         costmap = state.costmap
@@ -234,15 +241,37 @@ def navigation_step(
         replans[i] += 1
 
     for i in range(n):
+        if parked[i]:
+            # made way for a moving teammate: back once it has passed (``_makeway``)
+            j = int(aside[i])
+            if status[j] not in ("moving", "waiting") or passed(
+                _rest(pose, samples, paths, state.progress_m, j), state.goals_m[i], limit
+            ):
+                parked[i] = False
+                aside[i] = -1
+                target[i] = state.goals_m[i]
+                status[i] = "moving"
+                replan(i, with_mates=False)
+            elif status[i] == "arrived":
+                continue
+            elif math.hypot(*(pose[i, :2] - target[i])) <= 0.5 * params.goal_tolerance_m:
+                status[i] = "arrived"  # out of the way: the mover re-checks its progress
+                since[j] = -math.inf
+                continue
         if status[i] == "arrived":
             continue
         # half the tolerance: the estimate the decision uses may be off by a few cm
-        if math.hypot(*(pose[i, :2] - state.goals_m[i])) <= 0.5 * params.goal_tolerance_m:
+        near_goal = math.hypot(*(pose[i, :2] - state.goals_m[i]))
+        if not parked[i] and near_goal <= 0.5 * params.goal_tolerance_m:
             status[i] = "arrived"
             continue
-        if aside[i] >= 0 and (
-            math.hypot(*(pose[i, :2] - target[i])) <= params.goal_tolerance_m
-            or status[aside[i]] not in ("moving", "waiting")
+        if (
+            not parked[i]
+            and aside[i] >= 0
+            and (
+                math.hypot(*(pose[i, :2] - target[i])) <= params.goal_tolerance_m
+                or status[aside[i]] not in ("moving", "waiting")
+            )
         ):
             # out of the way (or the teammate is done): head for the goal again
             aside[i] = -1
@@ -268,6 +297,7 @@ def navigation_step(
                 stuck[i] += 1
                 if aside[i] >= 0:  # cannot get out of the way there: plan anew
                     aside[i] = -1
+                    parked[i] = False
                     target[i] = state.goals_m[i]
                 replan(i, with_mates=True)
             else:
@@ -292,7 +322,6 @@ def navigation_step(
         w_ref[active] = np.clip(w_f, -params.dwa.omega_max_rad_s, params.dwa.omega_max_rad_s)
 
     # give way: lower index first
-    gap = 2.0 * params.robot_radius_m + params.margin_m
     ahead = round(params.yield_distance_m / _SAMPLE_M)
     # a teammate's position and path ahead, made once (robot j's own turn, which may
     # re-plan it, comes before any i > j asks)
@@ -313,6 +342,8 @@ def navigation_step(
                 continue
             if math.hypot(*(pose[i, :2] - pose[j, :2])) > near_by:
                 continue
+            if aside[j] == i:
+                continue  # it makes way for me
             theirs = theirs_of.get(j)
             if theirs is None:
                 theirs = np.vstack(
@@ -336,6 +367,34 @@ def navigation_step(
                 best[i] = progress[i]
                 since[i] = t
                 break
+
+    # standing teammates in the way make way (``_makeway``)
+    standing = np.array([s == "arrived" for s in status]) & movable & ~parked & (aside < 0)
+    if standing.any():
+        block = params.robot_radius_m + params.inflation_m
+        for i in map(int, np.flatnonzero(active & (aside < 0) & ~parked)):
+            mine = samples[i][index[i] : index[i] + ahead, :2]
+            if len(mine) == 0:
+                continue
+            for j in map(int, np.flatnonzero(maybe[i] & standing)):
+                if j == i or t - asked[j] < params.stuck_time_s:
+                    continue
+                if math.hypot(*(target[i] - pose[j, :2])) <= limit:
+                    continue  # where it goes is where the other stands
+                if np.hypot(mine[:, 0] - pose[j, 0], mine[:, 1] - pose[j, 1]).min() >= gap:
+                    continue
+                rest = _rest(pose, samples, paths, progress, i)
+                if not cuts_path(state.costmap, pose[j, :2], block, rest):
+                    continue  # there is a way past it: a re-plan finds it
+                spot = make_way_spot(state, params, pose, mates, j, i, rest)
+                if spot is None:
+                    asked[j] = t
+                    continue
+                parked[j] = True
+                aside[j] = i
+                target[j] = spot
+                replan(j, with_mates=True)
+                standing[j] = False
 
     # the safety layer (for the robots under way: the others brake below)
     reach = params.dwa.v_max_m_s * params.dwa.horizon_s + params.robot_radius_m + 0.5
@@ -384,5 +443,24 @@ def navigation_step(
         t_s=t,
         target_m=target,
         aside_of=aside,
+        parked=parked,
+        asked_s=asked,
     )
     return new, v, w
+
+
+def _rest(
+    pose: FloatArray,
+    samples: list[FloatArray],
+    paths: list[PlanarPath | None],
+    progress: FloatArray,
+    j: int,
+) -> FloatArray:
+    """Robot ``j``'s position and its path from its progress on, every 10 cm (K, 2)."""
+    path = paths[j]
+    smp = samples[j]
+    if path is None or len(smp) == 0:
+        return np.asarray(pose[j : j + 1, :2])
+    spacing = path.length_m / max(len(smp) - 1, 1)
+    k = min(max(int(progress[j] / spacing), 0), len(smp) - 1)
+    return np.vstack([pose[j : j + 1, :2], smp[k::2, :2]])

@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from firefleet._typing import FloatArray, IntArray
+from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.navigation._astar import astar
 from firefleet.control.navigation._costmap import Costmap, build_costmap
 from firefleet.control.navigation._dwa import DwaParams
@@ -102,6 +102,9 @@ class NavigationParams:
         How much of their paths ahead two robots compare for a conflict [m].
     controller : PathFollowingController
         The deliverable's fuzzy path follower.
+    make_way_reach_m : float
+        How far from where it stands a robot looks for a spot out of a moving
+        teammate's way [m] (``_makeway``; only robots the inputs mark ``movable``).
     """
 
     robot_radius_m: float = 0.15
@@ -117,6 +120,7 @@ class NavigationParams:
     replan_offset_m: float = 0.5
     yield_distance_m: float = 2.0
     controller: PathFollowingController = field(default_factory=PathFollowingController.builtin)
+    make_way_reach_m: float = 4.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -130,6 +134,7 @@ class NavigationParams:
                 "stuck_time_s",
                 "replan_offset_m",
                 "yield_distance_m",
+                "make_way_reach_m",
             ),
         )
         if self.margin_m < 0 or self.corner_radius_m < 0 or self.wall_weight < 0:
@@ -157,12 +162,16 @@ class NavigationInputs:
         Every robot's position as the team received it [m].
     t_s : float
         Time [s].
+    movable : ndarray of bool, shape (N,), or None
+        Robots that may be asked to make way for a moving teammate while they stand
+        (arrived; ``_makeway``); None: none (an arrived robot stops for good).
     """
 
     pose: FloatArray
     ranges: Mapping[str, tuple[ArrayLike, ArrayLike]]
     teammates_xy_m: FloatArray
     t_s: float
+    movable: BoolArray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,6 +213,12 @@ class NavigationState:
     wall_tree : scipy.spatial.cKDTree or None
         A k-d tree of ``wall_points_m`` (built once; finds the walls near each robot in
         O(log K) instead of a scan of every wall cell), None to scan.
+    parked : ndarray of bool, shape (N,), or None
+        Robots that stood and make way for ``aside_of`` (they go back to their goal once
+        it has passed; ``_makeway``); None: none.
+    asked_s : ndarray, shape (N,), or None
+        When each standing robot was last found no spot to make way to [s] (it is not
+        asked again within ``stuck_time_s``); None: never.
     """
 
     costmap: Costmap
@@ -222,6 +237,8 @@ class NavigationState:
     target_m: FloatArray
     aside_of: IntArray
     wall_tree: cKDTree | None = None
+    parked: BoolArray | None = None
+    asked_s: FloatArray | None = None
 
     @property
     def arrived(self) -> FloatArray:
@@ -269,7 +286,9 @@ def _with_teammates(
 ) -> Costmap:
     """The static costmap with the teammates' discs on it as walls.
 
-    Exactly :func:`build_costmap` of the map with the discs' cells occupied, computed
+    Exactly :func:`build_costmap` of the map with the discs' cells occupied, plus the
+    price the static costmap adds to its cells beyond their walls' (the fires' and the
+    hot places' on the mission: a re-plan round a teammate must not lose it), computed
     only in a window about each disc (a disc lowers the clearance of the cells near it
     and nowhere else; the window reaches ``inflation + 20 wall_decay_m`` past the disc,
     where the disc's wall cost is below ``wall_weight * 2e-9``): O(window) per teammate
@@ -302,23 +321,40 @@ def _with_teammates(
     blocked = clearance <= params.inflation_m
     for r0, r1, c0, c1 in windows:
         cw = clearance[r0:r1, c0:c1]
-        with np.errstate(over="ignore"):
-            extra = params.wall_weight * np.exp(
-                -(np.minimum(cw, 1e9) - params.inflation_m) / params.wall_decay_m
-            )
-        cost[r0:r1, c0:c1] = np.where(blocked[r0:r1, c0:c1], np.inf, 1.0 + extra)
+        # the window's wall cost anew; any cost the static map adds besides its walls
+        # (the fires' and hot places' price, ``heat_costmap``) is kept
+        base = static.cost[r0:r1, c0:c1]
+        add = base - 1.0 - _wall_extra(static.clearance_m[r0:r1, c0:c1], params)
+        add = np.where(np.isfinite(base) & (add > 1e-9), add, 0.0)
+        cost[r0:r1, c0:c1] = np.where(
+            blocked[r0:r1, c0:c1] | ~np.isfinite(base),
+            np.inf,
+            1.0 + _wall_extra(cw, params) + add,
+        )
     teamed = OccupancyGrid(occ, grid.free & ~occ, grid.resolution_m, grid.origin_m, grid.name)
     for arr in (clearance, blocked, cost):
         arr.setflags(write=False)
     return Costmap(teamed, clearance, blocked, cost, float(params.inflation_m))
 
 
+def _wall_extra(clearance_m: FloatArray, params: NavigationParams) -> FloatArray:
+    """The wall cost per metre above 1 at a clearance (:func:`build_costmap`'s)."""
+    with np.errstate(over="ignore"):
+        out: FloatArray = params.wall_weight * np.exp(
+            -(np.minimum(clearance_m, 1e9) - params.inflation_m) / params.wall_decay_m
+        )
+    return out
+
+
 def _wall_points(grid: OccupancyGrid) -> FloatArray:
-    """Centres of the non-free cells with a free 4-neighbour, (K, 2) [m]."""
-    free = np.asarray(grid.free)
+    """Centres of the non-free cells with a free 4-neighbour, (K, 2) [m], the map's
+    outside counting as non-free (the costmap and the collision metric count it so: a
+    door in the map's edge is no way out; mission-house: a fighter drove 3 cm past the
+    front door's edge, off the map)."""
+    free = np.pad(np.asarray(grid.free), 1, constant_values=False)
     padded = np.pad(free, 1, constant_values=False)
     touches = padded[:-2, 1:-1] | padded[2:, 1:-1] | padded[1:-1, :-2] | padded[1:-1, 2:]
-    return np.asarray(grid.center_of(np.argwhere(~free & touches)))
+    return np.asarray(grid.center_of(np.argwhere(~free & touches) - 1))
 
 
 def navigation_init(
@@ -385,6 +421,8 @@ def navigation_init(
         target_m=g.copy(),
         aside_of=np.full(n, -1, dtype=np.int64),
         wall_tree=cKDTree(walls) if len(walls) else None,
+        parked=np.zeros(n, dtype=bool),
+        asked_s=np.full(n, -math.inf),
     )
 
 
@@ -460,8 +498,11 @@ def navigation_retarget(
     stuck[mask] = 0
     aside = state.aside_of.copy()
     aside[mask] = -1
+    parked = np.zeros(n, dtype=bool) if state.parked is None else state.parked.copy()
+    parked[mask] = False
     return replace(
         state,
+        parked=parked,
         goals_m=goals,
         target_m=target,
         status=tuple(status),
