@@ -46,7 +46,14 @@ from firefleet.control.mission._quiet import EPS_S as _EPS_S
 from firefleet.control.mission._quiet import is_quiet
 from firefleet.control.mission._scout import seen_update
 from firefleet.control.mission._team import TacticsState
-from firefleet.control.mission._upkeep import dropped, retarget, tank_changes, too_hot, watchdog
+from firefleet.control.mission._upkeep import (
+    dropped,
+    refill_wait,
+    retarget,
+    tank_changes,
+    too_hot,
+    watchdog,
+)
 from firefleet.control.mission._water import (
     add_water,
     cone_cells,
@@ -335,7 +342,8 @@ def _orders(
     spots_r = state.refill_spots_m
     spot_i = np.clip(state.refill_spot, 0, len(spots_r) - 1)
     off = np.hypot(*(spots_r[spot_i] - spots_r[0]).T)
-    refilling = (mode == REFILL) & at_goal & (d_goal + off <= params.refill_radius_m)
+    d_spot = np.hypot(*(pose[:, :2] - spots_r[spot_i]).T)  # not where it waits (_refill)
+    refilling = (mode == REFILL) & at_goal & (d_spot + off <= params.refill_radius_m)
     stop = (mode == DAMAGED) | refilling | ((mode == IDLE) & ~aside)
     v[stop] = 0.0
     w[stop] = 0.0
@@ -515,6 +523,7 @@ def tactics_step(
         if any(status[i] == "arrived" for i in explorers):
             state = replace(state, pending=True)
         state = watchdog(state, pose, t, params)
+        state = refill_wait(state, pose, working, params, t)
     since = t - state.last_plan_s
     if (state.pending and since >= params.replan_s) or since >= params.explore_replan_s:
         state = _plan(state, pose, tank, working, params)

@@ -3,7 +3,8 @@
 :func:`tank_changes` (empty tanks go to refill, full ones come back), :func:`too_hot` (a
 robot in hot air or by flames marks its place and backs out), :func:`dropped` (damaged
 robots leave their tasks), :func:`watchdog` (explorers that stall give their viewpoint
-up), and :func:`retarget`, which hands new goals to the navigation; called by
+up), :func:`refill_wait` (refillers wait clear of a refill spot the fire reaches), and
+:func:`retarget`, which hands new goals to the navigation; called by
 :func:`._step.tactics_step`.
 """
 
@@ -19,10 +20,11 @@ from firefleet.control.mission._fight import dry_flames
 from firefleet.control.mission._hot import live_hot, mark_hot, retreat_point
 from firefleet.control.mission._params import DAMAGED, EXPLORE, FIGHT, IDLE, REFILL, TacticsParams
 from firefleet.control.mission._quiet import tank_flags
+from firefleet.control.mission._refill import refill_goals
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.navigation import navigation_retarget
 
-__all__ = ["dropped", "retarget", "tank_changes", "too_hot", "watchdog"]
+__all__ = ["dropped", "refill_wait", "retarget", "tank_changes", "too_hot", "watchdog"]
 
 _MOVE_M = 0.25
 """A new goal this close to the old one does not re-plan the robot's path [m]."""
@@ -86,6 +88,29 @@ def tank_changes(
         pending=True,
     )
     return retarget(new, goals, pose)
+
+
+def refill_wait(
+    state: TacticsState, pose: FloatArray, working: BoolArray, params: TacticsParams, t_s: float
+) -> TacticsState:
+    """Refillers whose spot lies within ``standoff_m`` of a live hot place or a dry flame
+    wait at the nearest place clear of them; they go back once it is clear
+    (:func:`._refill.refill_goals`); at the navigation's period (never a quiet tick)."""
+    who = working & (state.mode == REFILL) & (state.refill_spot >= 0)
+    if not who.any():
+        return state
+    away = np.vstack(
+        [live_hot(state.hot_xy_m, state.hot_s, t_s, params.hot_forget_s), dry_flames(state, params)]
+    )
+    goals = state.goal_xy_m.copy()
+    goals[who] = refill_goals(
+        state.coarse,
+        state.refill_spots_m[state.refill_spot[who]],
+        away,
+        params.standoff_m,
+        pose[who, :2],
+    )
+    return retarget(state, goals, pose)
 
 
 def too_hot(

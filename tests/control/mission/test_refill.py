@@ -1,0 +1,104 @@
+"""Refillers wait clear of a hot refill spot (``control.mission._refill``): which spots
+are hot (the boundary by hand), where a hot spot's refiller waits (clear of every hot
+place, nearest by travel: a Dijkstra of its own over the plan's cells) and that one
+with no clear place in reach stays where it is."""
+
+from __future__ import annotations
+
+import heapq
+import math
+
+import numpy as np
+
+from firefleet.control.mission._coverage import CoarseMap, coarse_map
+from firefleet.control.mission._refill import refill_goals
+from firefleet.control.navigation import build_costmap
+from firefleet.world import OccupancyGrid
+
+CELL_M = 0.25
+
+
+def _floor(h: int = 12, w: int = 24) -> tuple[np.ndarray, CoarseMap]:
+    """An open floor of h x w cells of 0.25 m, with a wall across it at columns 11-12
+    (a door at rows 4-7 only, counted from the top)."""
+    occ = np.zeros((h, w), dtype=bool)
+    occ[:, 11:13] = True
+    occ[4:8, 11:13] = False
+    grid = OccupancyGrid(occ, ~occ, resolution_m=CELL_M)
+    return occ, coarse_map(build_costmap(grid, 0.1), CELL_M)
+
+
+def _centre(r: int, c: int, h: int) -> tuple[float, float]:
+    return ((c + 0.5) * CELL_M, (h - r - 0.5) * CELL_M)
+
+
+def _travel(occ: np.ndarray, start: tuple[int, int]) -> np.ndarray:
+    """8-connected Dijkstra over free cells, diagonals sqrt(2) cells, no corner cut."""
+    h, w = occ.shape
+    dist = np.full(occ.shape, np.inf)
+    dist[start] = 0.0
+    heap = [(0.0, start)]
+    while heap:
+        d, (r, c) = heapq.heappop(heap)
+        if d > dist[r, c]:
+            continue
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if (dr or dc) and 0 <= rr < h and 0 <= cc < w and not occ[rr, cc]:
+                    if dr and dc and (occ[r, cc] or occ[rr, c]):
+                        continue
+                    nd = d + CELL_M * (math.sqrt(2.0) if dr and dc else 1.0)
+                    if nd < dist[rr, cc] - 1e-12:
+                        dist[rr, cc] = nd
+                        heapq.heappush(heap, (nd, (rr, cc)))
+    return dist
+
+
+def test_a_spot_clear_by_clear_m_is_kept_and_a_nearer_one_moves() -> None:
+    """Hot place at (1.0, 1.5); clear_m 1.25 m: a spot 1.25 m away (exact in binary) is
+    clear and kept as it is; one 1.0 m away is hot and moves at least 1.25 m from it."""
+    _, cm = _floor()
+    away = np.array([[1.0, 1.5]])
+    spots = np.array([[2.25, 1.5], [2.0, 1.5]])
+    goals = refill_goals(cm, spots, away, 1.25, spots)
+    assert goals[0].tolist() == [2.25, 1.5]
+    assert not np.allclose(goals[1], spots[1])
+    assert math.hypot(goals[1, 0] - 1.0, goals[1, 1] - 1.5) >= 1.25
+    # nothing to avoid: every refiller goes to its spot
+    assert refill_goals(cm, spots, np.zeros((0, 2)), 1.25, spots).tolist() == spots.tolist()
+
+
+def test_a_hot_spots_refiller_waits_at_the_nearest_clear_place_by_travel() -> None:
+    """A spot just west of the wall with the west room hot near the wall: the nearest
+    clear cell (by its own Dijkstra, every free cell tried) is where the refiller
+    waits; the place found is a cell centre as far by travel as that one."""
+    occ, cm = _floor()
+    h = occ.shape[0]
+    away = np.array([[2.0, 1.0], [2.0, 2.0]])
+    spot_rc = (10, 10)  # near the bottom, west of the wall
+    spot = np.array([_centre(*spot_rc, h)])
+    goal = refill_goals(cm, spot, away, 1.0, spot)[0]
+    dist = _travel(occ, spot_rc)
+    free = np.argwhere(~occ)
+    xy = np.array([_centre(int(r), int(c), h) for r, c in free])
+    clear = (
+        np.hypot(xy[:, None, 0] - away[None, :, 0], xy[:, None, 1] - away[None, :, 1]).min(axis=1)
+        >= 1.0
+    )
+    best = dist[free[clear, 0], free[clear, 1]].min()
+    r = h - 1 - int(goal[1] / CELL_M)
+    c = int(goal[0] / CELL_M)
+    assert np.allclose(goal, _centre(r, c, h))
+    assert dist[r, c] == best
+    assert np.hypot(*(away - goal).T).min() >= 1.0
+
+
+def test_with_no_clear_place_in_reach_the_refiller_stays_where_it_is() -> None:
+    """Hot places every 0.5 m over the whole floor, clear_m 1 m: no clear cell; the
+    refiller's goal is where it stands, not a point in the heat."""
+    _, cm = _floor()
+    away = np.array([[x, y] for x in np.arange(0.0, 6.01, 0.5) for y in np.arange(0.0, 3.01, 0.5)])
+    spots = np.array([[1.125, 1.125]])
+    here = np.array([[1.6, 0.9]])
+    assert refill_goals(cm, spots, away, 1.0, here).tolist() == here.tolist()
