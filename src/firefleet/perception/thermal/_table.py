@@ -46,6 +46,27 @@ def interp_table(x: float, xp: FloatArray, fp: FloatArray) -> float:  # pragma: 
 
 
 @numba.njit(cache=True)
+def _bracket(x: float, xp: FloatArray, lo: int, hi: int) -> int:  # pragma: no cover - compiled
+    """The interval ``lo`` with ``xp[lo] <= x < xp[lo + 1]``, for ``xp[0] <= x < xp[-1]``
+    (``xp`` ascending, n >= 2), by bisection from the guess ``xp[lo] <= x < xp[hi]``;
+    a guess that does not hold widens to the whole table."""
+    n = xp.size
+    lo = min(max(lo, 0), n - 2)
+    hi = min(max(hi, lo + 1), n - 1)
+    if xp[lo] > x:
+        lo = 0
+    if xp[hi] <= x:
+        hi = n - 1
+    while hi - lo > 1:  # xp[lo] <= x < xp[hi]
+        mid = (lo + hi) // 2
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(cache=True)
 def interp_sorted(x: float, xp: FloatArray, fp: FloatArray) -> float:  # pragma: no cover - compiled
     """``np.interp(x, xp, fp)`` for strictly increasing ``xp`` (bisection), clamped to
     ``fp[0]`` and ``fp[-1]`` outside.
@@ -63,13 +84,7 @@ def interp_sorted(x: float, xp: FloatArray, fp: FloatArray) -> float:  # pragma:
         return float(fp[n - 1])
     if x < xp[0]:
         return float(fp[0])
-    lo, hi = 0, n - 1  # xp[lo] <= x < xp[hi]
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if xp[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
+    lo = _bracket(x, xp, 0, n - 1)
     if xp[lo] == x:
         return float(fp[lo])
     slope = (fp[lo + 1] - fp[lo]) / (xp[lo + 1] - xp[lo])
@@ -96,18 +111,7 @@ def interp_sorted_from(
         return float(fp[n - 1])
     if x < xp[0]:
         return float(fp[0])
-    lo = min(max(lo, 0), n - 2)
-    hi = min(max(hi, lo + 1), n - 1)
-    if xp[lo] > x:
-        lo = 0
-    if xp[hi] <= x:
-        hi = n - 1
-    while hi - lo > 1:  # xp[lo] <= x < xp[hi]
-        mid = (lo + hi) // 2
-        if xp[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
+    lo = _bracket(x, xp, lo, hi)
     if xp[lo] == x:
         return float(fp[lo])
     slope = (fp[lo + 1] - fp[lo]) / (xp[lo + 1] - xp[lo])
@@ -156,18 +160,7 @@ def interp_sorted_slopes(
         return float(fp[n - 1])
     if x < xp[0]:
         return float(fp[0])
-    lo = min(max(lo, 0), n - 2)
-    hi = min(max(hi, lo + 1), n - 1)
-    if xp[lo] > x:
-        lo = 0
-    if xp[hi] <= x:
-        hi = n - 1
-    while hi - lo > 1:  # xp[lo] <= x < xp[hi]
-        mid = (lo + hi) // 2
-        if xp[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
+    lo = _bracket(x, xp, lo, hi)
     if xp[lo] == x:
         return float(fp[lo])
     return float(slope[lo] * (x - xp[lo]) + fp[lo])
