@@ -40,7 +40,7 @@ from firefleet.control.navigation._team import (
     _with_teammates,
 )
 
-__all__ = ["clear_of", "cuts_path", "make_way_spot", "passed", "price"]
+__all__ = ["clear_of", "cuts_path", "make_way_spot", "open_cells_near", "passed", "price"]
 
 _WINDOW_M = 1.5
 """Half the side of the window the way past a standing robot is judged in [m]."""
@@ -134,6 +134,29 @@ def passed(mover_rest_xy_m: FloatArray, home_xy_m: FloatArray, limit_m: float) -
     return bool(d.min() > limit_m)
 
 
+def open_cells_near(
+    costmap: Costmap, params: NavigationParams, xy_m: FloatArray, reach_m: float
+) -> FloatArray:
+    """Centres (K, 2) [m] of the open cells in the square of half-side ``reach_m`` [m]
+    about ``xy_m`` (2,) [m], the unpriced ones only where there are any (the mission
+    prices cells by fires and hot places: a spot out of a teammate's way must not lie in
+    the fire's gas); (0, 2) when none is open."""
+    grid = costmap.grid
+    reach = round(reach_m / grid.resolution_m)
+    rc = grid.cell_of(xy_m)
+    h, w = grid.shape
+    r0, r1 = max(rc[0] - reach, 0), min(rc[0] + reach + 1, h)
+    c0, c1 = max(rc[1] - reach, 0), min(rc[1] + reach + 1, w)
+    cells = np.argwhere(~costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
+    if len(cells) == 0:
+        return np.zeros((0, 2))
+    cheap = price(costmap, params, cells)
+    if (cheap <= 0.0).any():
+        cells = cells[cheap <= 0.0]
+    out: FloatArray = grid.center_of(cells)
+    return out
+
+
 def make_way_spot(
     state: NavigationState,
     params: NavigationParams,
@@ -154,18 +177,9 @@ def make_way_spot(
     grid = state.costmap.grid
     gap = 2.0 * params.robot_radius_m + params.margin_m
     limit = gap + params.goal_tolerance_m + 0.1
-    reach = round(params.make_way_reach_m / grid.resolution_m)
-    rc = grid.cell_of(pose[j, :2])
-    h, w = grid.shape
-    r0, r1 = max(rc[0] - reach, 0), min(rc[0] + reach + 1, h)
-    c0, c1 = max(rc[1] - reach, 0), min(rc[1] + reach + 1, w)
-    cells = np.argwhere(~state.costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
-    if len(cells) == 0:
+    xy = open_cells_near(state.costmap, params, pose[j, :2], params.make_way_reach_m)
+    if len(xy) == 0:
         return None
-    cheap = price(state.costmap, params, cells)
-    if (cheap <= 0.0).any():
-        cells = cells[cheap <= 0.0]
-    xy = grid.center_of(cells)
     dist = np.hypot(xy[:, 0] - pose[j, 0], xy[:, 1] - pose[j, 1])
     keep = dist <= params.make_way_reach_m
     xy, dist = xy[keep], dist[keep]

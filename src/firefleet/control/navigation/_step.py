@@ -14,8 +14,8 @@ from firefleet.control.navigation._makeway import (
     clear_of,
     cuts_path,
     make_way_spot,
+    open_cells_near,
     passed,
-    price,
 )
 from firefleet.control.navigation._team import (
     _SAMPLE_M,
@@ -124,21 +124,9 @@ def _aside_spot(
     tolerance + 0.1 m (so a robot arrived near it is out of the way) from
     teammate ``j``'s remaining path ``rest`` (K, 2) and from every other robot, and
     that ``i`` can reach around ``j``; None if there is none."""
-    grid = state.costmap.grid
-    reach = round(3.0 / grid.resolution_m)
-    rc = grid.cell_of(pose[i, :2])
-    h, w = grid.shape
-    r0, r1 = max(rc[0] - reach, 0), min(rc[0] + reach + 1, h)
-    c0, c1 = max(rc[1] - reach, 0), min(rc[1] + reach + 1, w)
-    cells = np.argwhere(~state.costmap.blocked[r0:r1, c0:c1]) + np.array([r0, c0])
-    if len(cells) == 0:
+    xy = open_cells_near(state.costmap, params, pose[i, :2], 3.0)
+    if len(xy) == 0:
         return None
-    # unpriced cells only where there are any (the mission prices the cells by fires
-    # and hot places: a spot out of a teammate's way must not be in the fire's gas)
-    cheap = price(state.costmap, params, cells)
-    if (cheap <= 0.0).any():
-        cells = cells[cheap <= 0.0]
-    xy = grid.center_of(cells)
     limit = gap + params.goal_tolerance_m + 0.1
     keep = clear_of(xy, np.ascontiguousarray(rest, dtype=float), limit) & clear_of(
         xy, np.ascontiguousarray(np.delete(mates, i, axis=0), dtype=float), limit
