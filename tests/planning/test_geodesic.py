@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
@@ -10,32 +9,12 @@ import pytest
 
 from firefleet.errors import InputError
 from firefleet.planning.geodesic import travel_distance_m
+from tests._dijkstra import grid_dijkstra
 
 
 def _reference(free: np.ndarray, src: tuple[int, int], h: float) -> np.ndarray:
     """Dijkstra with a heap over the 8 neighbours, no corner cutting (the definition)."""
-    rows, cols = free.shape
-    dist = np.full(free.shape, np.inf)
-    dist[src] = 0.0
-    heap = [(0.0, src)]
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if d > dist[r, c]:
-            continue
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, c + dc
-                if (dr, dc) == (0, 0) or not (0 <= rr < rows and 0 <= cc < cols):
-                    continue
-                if not free[rr, cc]:
-                    continue
-                if dr and dc and not (free[r + dr, c] and free[r, c + dc]):
-                    continue
-                nd = d + h * math.hypot(dr, dc)
-                if nd < dist[rr, cc] - 1e-12:
-                    dist[rr, cc] = nd
-                    heapq.heappush(heap, (nd, (rr, cc)))
-    return dist
+    return grid_dijkstra(free, src, h)
 
 
 @pytest.mark.parametrize("seed", range(5))

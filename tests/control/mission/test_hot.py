@@ -4,7 +4,6 @@ probe, and a brute-force retreat (a plain Dijkstra over a small plan, every cell
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
@@ -14,6 +13,7 @@ from firefleet.control.mission._coverage import CoarseMap, coarse_map
 from firefleet.control.mission._hot import live_hot, mark_hot, probe_estimate, retreat_point
 from firefleet.control.navigation import build_costmap
 from firefleet.world import OccupancyGrid
+from tests._dijkstra import grid_dijkstra
 
 CELL_M = 0.25
 
@@ -205,26 +205,7 @@ def _cm(occ: np.ndarray) -> CoarseMap:
 
 def _dijkstra(free: np.ndarray, start: tuple[int, int]) -> np.ndarray:
     """Travel [m] on the free cells' 8-neighbour graph (no corner cutting), by heapq."""
-    h, w = free.shape
-    dist = np.full((h, w), np.inf)
-    dist[start] = 0.0
-    heap = [(0.0, start)]
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if d > dist[r, c]:
-            continue
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, c + dc
-                if (dr, dc) == (0, 0) or not (0 <= rr < h and 0 <= cc < w) or not free[rr, cc]:
-                    continue
-                if dr and dc and not (free[r + dr, c] and free[r, c + dc]):
-                    continue
-                nd = d + CELL_M * math.hypot(dr, dc)
-                if nd < dist[rr, cc]:
-                    dist[rr, cc] = nd
-                    heapq.heappush(heap, (nd, (rr, cc)))
-    return dist
+    return grid_dijkstra(free, start, CELL_M)
 
 
 def _centre(r: int, c: int, h: int) -> tuple[float, float]:

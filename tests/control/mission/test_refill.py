@@ -5,7 +5,6 @@ with no clear place in reach stays where it is."""
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
@@ -14,6 +13,7 @@ from firefleet.control.mission._coverage import CoarseMap, coarse_map
 from firefleet.control.mission._refill import refill_goals
 from firefleet.control.navigation import build_costmap
 from firefleet.world import OccupancyGrid
+from tests._dijkstra import grid_dijkstra
 
 CELL_M = 0.25
 
@@ -34,25 +34,7 @@ def _centre(r: int, c: int, h: int) -> tuple[float, float]:
 
 def _travel(occ: np.ndarray, start: tuple[int, int]) -> np.ndarray:
     """8-connected Dijkstra over free cells, diagonals sqrt(2) cells, no corner cut."""
-    h, w = occ.shape
-    dist = np.full(occ.shape, np.inf)
-    dist[start] = 0.0
-    heap = [(0.0, start)]
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if d > dist[r, c]:
-            continue
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, c + dc
-                if (dr or dc) and 0 <= rr < h and 0 <= cc < w and not occ[rr, cc]:
-                    if dr and dc and (occ[r, cc] or occ[rr, c]):
-                        continue
-                    nd = d + CELL_M * (math.sqrt(2.0) if dr and dc else 1.0)
-                    if nd < dist[rr, cc] - 1e-12:
-                        dist[rr, cc] = nd
-                        heapq.heappush(heap, (nd, (rr, cc)))
-    return dist
+    return grid_dijkstra(~occ, start, CELL_M)
 
 
 def test_a_spot_clear_by_clear_m_is_kept_and_a_nearer_one_moves() -> None:

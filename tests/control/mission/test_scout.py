@@ -5,7 +5,6 @@ breadth-first search for the fire's region, and every cell tried for the scout's
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
@@ -15,6 +14,7 @@ from firefleet.control.mission._coverage import CoarseMap, coarse_map
 from firefleet.control.mission._scout import fire_region, scout_goals, seen_update
 from firefleet.control.navigation import build_costmap
 from firefleet.world import OccupancyGrid
+from tests._dijkstra import grid_dijkstra
 
 CELL_M = 0.25
 HFOV = math.radians(51.0)
@@ -156,26 +156,7 @@ def test_fire_region_is_the_breadth_first_band_through_the_floor() -> None:
 
 
 def _dijkstra(free: np.ndarray, start: tuple[int, int]) -> np.ndarray:
-    h, w = free.shape
-    dist = np.full((h, w), np.inf)
-    dist[start] = 0.0
-    heap = [(0.0, start)]
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if d > dist[r, c]:
-            continue
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, c + dc
-                if (dr, dc) == (0, 0) or not (0 <= rr < h and 0 <= cc < w) or not free[rr, cc]:
-                    continue
-                if dr and dc and not (free[r + dr, c] and free[r, c + dc]):
-                    continue
-                nd = d + CELL_M * math.hypot(dr, dc)
-                if nd < dist[rr, cc]:
-                    dist[rr, cc] = nd
-                    heapq.heappush(heap, (nd, (rr, cc)))
-    return dist
+    return grid_dijkstra(free, start, CELL_M)
 
 
 def _sight(occ: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
