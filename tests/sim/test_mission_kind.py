@@ -133,6 +133,31 @@ def test_a_run_without_the_team_burns_the_baseline() -> None:
     assert not np.any(np.abs(result.pose - result.pose[0]) > 1e-9)  # nobody moved
 
 
+def test_the_baseline_says_when_its_fire_went_out() -> None:
+    """``baseline_all_out_s`` is the ``all_out_s`` of the world without the team: a fire
+    on a 1 m x 1 m patch of fuel 0.05 (15 s a cell, ``burn_s_per_fuel`` 300 s) is out
+    within the run; the office's fire at fuel 1 still burns at 40 s (None)."""
+    from firefleet.scenarios._mission import FuelRegion, FuelSpec
+
+    scenario = _short(OFFICE, 60.0, robots=False)
+    x, y = scenario.world.fires[0].x_m, scenario.world.fires[0].y_m  # type: ignore[union-attr]
+    fuel = FuelSpec(
+        default=0.0, regions=(FuelRegion((x - 0.5, x + 0.5), (y - 0.5, y + 0.5), 0.05),)
+    )
+    world = dataclasses.replace(scenario.world, fuel=fuel)  # type: ignore[type-var]
+    patch = dataclasses.replace(scenario, world=world)
+    metrics = mission_metrics(firefleet.simulate(patch, record_every=100))
+    out_s = metrics["all_out_s"]
+    assert isinstance(out_s, float)
+    assert 15.0 <= out_s < 60.0  # at least one cell's burning time
+    assert metrics["baseline_all_out_s"] == pytest.approx(metrics["all_out_s"], abs=0.1)  # one step
+    burning = mission_metrics(
+        firefleet.simulate(_short(OFFICE, 40.0, robots=False), record_every=100)
+    )
+    assert np.isnan(burning["baseline_all_out_s"])
+    assert np.isnan(burning["all_out_s"])
+
+
 def test_air_near_the_floor_damages_a_robot_in_the_fire() -> None:
     scenario = _short(OFFICE, 10.0)
     world = mission_world(scenario)

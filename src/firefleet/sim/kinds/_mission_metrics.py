@@ -23,6 +23,12 @@ def baseline_burned_area_m2(scenario: Scenario) -> float:
     """Burned area [m^2] of the same world without the team at ``duration_s`` (the same
     seed: the fire draws from its own generator, so the two runs burn alike until the
     team's water changes them)."""
+    return _baseline(scenario)[0]
+
+
+def _baseline(scenario: Scenario) -> tuple[float, float]:
+    """The world without the team to ``duration_s``: its burned area [m^2] and when
+    every fire in it was out [s] (NaN: some still burned at the end)."""
     from firefleet.sim.kinds.mission import mission_world
 
     world = mission_world(scenario)
@@ -32,7 +38,8 @@ def baseline_burned_area_m2(scenario: Scenario) -> float:
         state = world.step(state, t)
         t = state.next_s
     area = world.field.resolution_m**2
-    return float(np.count_nonzero(state.fire.state != UNBURNT) * area)
+    burned = float(np.count_nonzero(state.fire.state != UNBURNT) * area)
+    return burned, float(state.log["all_out_s"])
 
 
 def _component_burning(fire_state: np.ndarray, cell: tuple[int, int]) -> bool:
@@ -99,11 +106,14 @@ def mission_metrics(result: SimResult) -> Metrics:
     ``all_out_s``: when every fire had started and none burned (None if never);
     ``burned_area_m2`` (cells that burned) and ``baseline_burned_area_m2`` (the same
     world without the team) and their ratio ``burned_vs_baseline`` (NaN when the
-    baseline burns nothing); ``victims_found`` and ``victims_found_s`` (a victim is
-    found when the team confirms a person detection within 2 m of it); ``victims_alive``
-    (fractional effective dose below 1); ``explored_pct`` (free map cells a thermal
-    camera covered); ``collisions`` (robots that touched a wall or another robot);
-    ``robots_damaged``; ``water_used_l`` per robot.
+    baseline burns nothing); ``baseline_all_out_s``: when every fire of the baseline
+    was out (None if it burned on to the end: the fire the team put out, or held to a
+    room until its fuel was spent, would not have gone out without it);
+    ``victims_found`` and ``victims_found_s`` (a victim is found when the team confirms
+    a person detection within 2 m of it); ``victims_alive`` (fractional effective dose
+    below 1); ``explored_pct`` (free map cells a thermal camera covered);
+    ``collisions`` (robots that touched a wall or another robot); ``robots_damaged``;
+    ``water_used_l`` per robot.
     """
     from firefleet.sim.kinds.mission import _command, _grid, mission_world
 
@@ -147,7 +157,7 @@ def mission_metrics(result: SimResult) -> Metrics:
     elif cmd.robots:  # a result without them: the recorded poses
         collided = int(_touching(_grid(scenario), result.pose[:, :, :2], cmd.robot_radius_m).sum())
     burned = float(np.count_nonzero(final != UNBURNT) * area)
-    baseline = baseline_burned_area_m2(scenario)
+    baseline, baseline_out = _baseline(scenario)
     return {
         "fires_detected": float(detected),
         "first_detection_s": float(fire_det["t_s"].min()) if len(fire_det) else math.nan,
@@ -156,6 +166,7 @@ def mission_metrics(result: SimResult) -> Metrics:
         "burned_area_m2": burned,
         "baseline_burned_area_m2": baseline,
         "burned_vs_baseline": burned / baseline if baseline > 0.0 else math.nan,
+        "baseline_all_out_s": baseline_out,  # NaN (null): the fire without the team burns on
         "victims_found": float(np.count_nonzero(np.isfinite(found_s))),
         "victims_found_s": [float(v) for v in found_s],  # NaN: not found
         "victims_alive": float(np.count_nonzero(np.asarray(x["victim_dose"]) < 1.0)),

@@ -80,6 +80,7 @@ METRIC_NAMES = (
     "burned_area_m2",
     "baseline_burned_area_m2",
     "burned_vs_baseline",
+    "baseline_all_out_s",
     "victims_found",
     "victims_found_s",
     "victims_alive",
