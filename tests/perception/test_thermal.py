@@ -305,3 +305,51 @@ def test_detect_bad_input() -> None:
     with pytest.raises(InputError, match="person_min_c"):
         DetectionParams(person_min_c=40.0, person_max_c=30.0)
     assert detect(frame).detections == ()
+
+
+def _gas_and_flames(cores: list[tuple[slice, slice]]) -> tuple[np.ndarray, np.ndarray]:
+    """A door full of hot gas (200 C, 1 m away) with flames (450 C, 3 m away) in it."""
+    frame = np.full((60, 80), 20.0)
+    depth = np.full(frame.shape, np.nan)
+    frame[8:52, 10:70] = 200.0
+    depth[8:52, 10:70] = 1.0
+    for rows, cols in cores:
+        frame[rows, cols] = 450.0
+        depth[rows, cols] = 3.0
+    return frame, depth
+
+
+def test_flame_cores_are_placed_on_the_flames_not_on_the_gas() -> None:
+    core = (slice(26, 32), slice(52, 56))
+    frame, depth = _gas_and_flames([core])
+    # one region over the gas and the flames: its median depth is the gas's
+    whole = detect(frame, depth_m=depth).detections
+    assert [d.kind for d in whole] == ["fire"]
+    assert whole[0].range_m == pytest.approx(1.0, abs=0.1)
+    # reported as its core: the same bearing and range as the flames seen alone
+    split = detect(frame, depth_m=depth, params=DetectionParams(flame_core_c=430.0)).detections
+    alone_frame = np.full((60, 80), 20.0)
+    alone_depth = np.full(frame.shape, np.nan)
+    alone_frame[core], alone_depth[core] = 450.0, 3.0
+    alone = detect(alone_frame, depth_m=alone_depth).detections
+    assert [d.kind for d in split] == [d.kind for d in alone] == ["fire"]
+    assert split[0].range_m == pytest.approx(alone[0].range_m, rel=1e-12)
+    assert split[0].bearing_rad == pytest.approx(alone[0].bearing_rad, abs=1e-12)
+    assert split[0].range_m is not None
+    assert split[0].range_m > 3.0  # 3 m along the axis, off it: farther along the ray
+    assert split[0].area_px == 24
+
+
+def test_each_flame_core_is_a_detection_and_gas_alone_stays_one() -> None:
+    frame, depth = _gas_and_flames([(slice(20, 24), slice(20, 24)), (slice(30, 36), slice(55, 60))])
+    p = DetectionParams(flame_core_c=430.0)
+    cores = detect(frame, depth_m=depth, params=p).detections
+    assert sorted(d.area_px for d in cores) == [16, 30]
+    assert all(d.range_m == pytest.approx(3.0, rel=0.15) for d in cores)
+    assert cores[0].bearing_rad * cores[1].bearing_rad < 0  # one left, one right of the axis
+    gas, gas_depth = _gas_and_flames([])
+    only = detect(gas, depth_m=gas_depth, params=p).detections
+    assert [d.kind for d in only] == ["fire"]
+    assert only[0].area_px == 44 * 60
+    with pytest.raises(InputError, match=r"flame_core_c 50\.0 must be at least fire_min_c"):
+        DetectionParams(flame_core_c=50.0)

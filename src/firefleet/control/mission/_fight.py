@@ -17,11 +17,19 @@ from firefleet.control.mission._params import TacticsParams
 from firefleet.control.mission._ring import has_shot, ring_slots
 from firefleet.control.mission._scout import scout_goals
 from firefleet.control.mission._team import TacticsState
-from firefleet.control.mission._water import soaked_at
+from firefleet.control.mission._water import add_water, cone_cells, soaked_at, wets_flames
 from firefleet.control.navigation import Costmap
 from firefleet.world import OccupancyGrid
 
-__all__ = ["dry_flames", "fight_goals", "fire_costmap", "flame_guard", "shot_limits_m"]
+__all__ = [
+    "dry_flames",
+    "fight_goals",
+    "fight_through",
+    "fire_costmap",
+    "flame_guard",
+    "known_clear",
+    "shot_limits_m",
+]
 
 
 def _reachable(blocked: BoolArray, grid: OccupancyGrid, xy_m: FloatArray) -> BoolArray:
@@ -52,6 +60,21 @@ def _aim_spots(state: TacticsState, fire: int, params: TacticsParams) -> tuple[F
             found = True
     out: FloatArray = k.spot_xy_m[mine]
     return out, found
+
+
+def _on(mask: BoolArray | None, grid: OccupancyGrid, xy_m: FloatArray) -> BoolArray:
+    """Whether points (M, 2) [m] fall on ``mask``'s map cells (None: everywhere; NaN and
+    points off the map: no)."""
+    pts = np.asarray(xy_m, dtype=float).reshape(-1, 2)
+    ok = np.isfinite(pts).all(axis=1)
+    if mask is None:
+        out_all: BoolArray = ok
+        return out_all
+    inside = ok & grid.contains(np.nan_to_num(pts))
+    rc = grid.cell_of(np.nan_to_num(pts))
+    h, w = grid.shape
+    out: BoolArray = inside & mask[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+    return out
 
 
 def _standable(costmap: Costmap, xy_m: FloatArray) -> BoolArray:
@@ -85,6 +108,51 @@ def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
         d = np.hypot(fl[:, None, 0] - dry[None, :, 0], fl[:, None, 1] - dry[None, :, 1])
         wet &= d.min(axis=1) > params.standoff_m
     out: FloatArray = fl[~wet]
+    return out
+
+
+def known_clear(state: TacticsState, pose: FloatArray, params: TacticsParams) -> BoolArray:
+    """Coarse cells (Hc, Wc) the team knows to be clear of fire now: in a thermal
+    camera's view within ``scout_stale_s`` (a fire there would have been detected; the
+    flames it did detect keep the slots off by themselves), or within ``standoff_m`` of
+    a robot (its probe reads the air there).
+
+    A fighter's slot and a scout's viewpoint lie on such cells only. The flames the team
+    places are a few points of what burns: a room the fire fills is seen through its
+    door as a wedge, and a ring about the flames seen in it put slots in the room's
+    corners, where the fire burned unseen (mission-office seed 0 at 163 s: a fighter
+    sent to a slot 1.7 m from the nearest believed flame was damaged in the door 7 s
+    later).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.mission._coverage import coarse_map
+    >>> from firefleet.control.mission._team import tactics_init
+    >>> from firefleet.control.navigation import build_costmap
+    >>> from firefleet.world import OccupancyGrid
+    >>> walls = np.zeros((20, 40), dtype=bool)
+    >>> grid = OccupancyGrid(walls, ~walls, resolution_m=0.25)
+    >>> p = TacticsParams()
+    >>> pose = np.array([[1.0, 2.5, 0.0]])
+    >>> state = tactics_init(grid, pose, p)
+    >>> clear = known_clear(state, pose, p)  # nothing seen yet: only about the robot
+    >>> bool(clear[10, 4]), bool(clear[10, 20])
+    (True, False)
+    """
+    cm = state.coarse
+    seen = state.fire_seen_s
+    if seen.shape == cm.shape:
+        out: BoolArray = seen >= state.t_s - params.scout_stale_s
+    else:
+        out = np.zeros(cm.shape, dtype=bool)
+    return out | _near_mask(cm, pose[:, :2], params.standoff_m)
+
+
+def _fine(coarse: BoolArray, cm: CoarseMap, shape: tuple[int, ...]) -> BoolArray:
+    """A coarse mask on the map's cells (each coarse cell is ``factor`` map cells a side)."""
+    f = cm.factor
+    out: BoolArray = np.repeat(np.repeat(coarse, f, axis=0), f, axis=1)[: shape[0], : shape[1]]
     return out
 
 
@@ -139,6 +207,7 @@ def fight_goals(
                     grid, pose[:, :2], 1.0
                 )
             reach = _reachable(blocked, state.nav.costmap.grid, pose[:, :2])
+            reach &= _fine(known_clear(state, pose, params), state.coarse, reach.shape)
         # the ring about the spots aimed at (the flames; not the hot gas, which a fire
         # pushes metres out of its room: mission-office seed 1, a ring about the gas in
         # the corridor put a fighter in the next room, without a shot, for 50 s)
@@ -148,17 +217,26 @@ def fight_goals(
         if dry:
             flames = state.knowledge.spot_xy_m[state.knowledge.spot_flame]
             goals[team] = _ring(state, pose[team, :2], aim, avoid, reach, params, flames)
-            # a slot left in a wall or without a shot (none was found): look instead
+            # a slot left in a wall, out of reach or of the known clear floor, or
+            # without a shot (none was found): look instead
             slots = goals[team]
-            lost = ~_standable(state.nav.costmap, slots) | ~has_shot(
-                state.coarse, slots, aim, near_m, shot_m
+            lost = (
+                ~_standable(state.nav.costmap, slots)
+                | ~_on(reach, state.nav.costmap.grid, slots)
+                | ~has_shot(state.coarse, slots, aim, near_m, shot_m)
             )
         else:
             lost = np.ones(len(team), dtype=bool)  # every flame believed soaked: look
         if lost.any():
             cm = state.coarse
             mine = state.knowledge.spot_xy_m[state.knowledge.spot_fire == fid]
-            keep_off = _near_mask(cm, dry_flames(state, params), params.scout_near_m)
+            # every flame of the team's, soaked ones too: the gas by a soaked door may
+            # still be deadly (mission-office seed 0, 153 s: the door's flames soaked,
+            # the room behind it burning, a fighter sent to look from the doorway was
+            # damaged there)
+            flames_all = state.knowledge.spot_xy_m[state.knowledge.spot_flame]
+            keep_off = _near_mask(cm, flames_all, params.scout_near_m)
+            keep_off |= ~known_clear(state, pose, params)
             keep_off |= _near_mask(cm, avoid, params.standoff_m)
             look = scout_goals(
                 cm,
@@ -175,11 +253,17 @@ def fight_goals(
             ok = np.isfinite(look[:, 0])
             idx = team[lost]
             goals[idx[ok]] = look[ok]
-            if not dry:
+            rest = idx[~ok]
+            if not dry and len(rest):
                 # nothing left to look at: the ring about the (soaked) flames, as before
-                rest = idx[~ok]
-                if len(rest):
-                    goals[rest] = _ring(state, pose[rest, :2], aim, avoid, reach, params)
+                goals[rest] = _ring(state, pose[rest, :2], aim, avoid, reach, params)
+            if len(rest):
+                # no valid slot and nothing to look from: it stays where it is (clear,
+                # by its probe), and sprays what it has a shot at from there
+                bad = ~_standable(state.nav.costmap, goals[rest]) | ~_on(
+                    reach, state.nav.costmap.grid, goals[rest]
+                )
+                goals[rest[bad]] = pose[rest[bad], :2]
 
 
 def _ring(
@@ -311,3 +395,74 @@ def flame_guard(
             nearest = int(np.argmin(np.where(ahead[i], np.hypot(dx[i], dy[i]), np.inf)))
             w[i] = -math.copysign(0.5 * omega_max_rad_s, float(off[i, nearest]))
     return v, w
+
+
+def fight_through(
+    pose: FloatArray,
+    flames_xy_m: FloatArray,
+    wet_l_m2: FloatArray,
+    cm: CoarseMap,
+    params: TacticsParams,
+) -> tuple[float, bool, FloatArray]:
+    """A fighter the flame guard holds (:func:`flame_guard`) with water in its tank:
+    it faces the nearest flame that holds it and sprays it when the cone wets a dry
+    cell by the flames, so that the way opens as the ledger soaks them (one held
+    turning away from the flames about it, its way out through them, stood in the fire
+    room for 80 s and was damaged: mission-office seed 4).
+
+    Parameters
+    ----------
+    pose : ndarray, shape (3,)
+        The fighter's estimated pose.
+    flames_xy_m : ndarray, shape (F, 2)
+        The flames the guard keeps it from [m] (:func:`dry_flames`).
+    wet_l_m2 : ndarray, shape (Hc, Wc) or (0, 0)
+        The team's ledger [L/m^2].
+    cm : CoarseMap
+    params : TacticsParams
+
+    Returns
+    -------
+    omega_rad_s : float
+        Its turn rate.
+    spray : bool
+        Whether it sprays.
+    wet_l_m2 : ndarray
+        The ledger after the spray (the input when it does not spray).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.control.mission._coverage import coarse_map
+    >>> from firefleet.control.mission._params import TacticsParams
+    >>> from firefleet.control.navigation import build_costmap
+    >>> from firefleet.world import OccupancyGrid
+    >>> walls = np.zeros((40, 40), dtype=bool)
+    >>> cm = coarse_map(build_costmap(OccupancyGrid(walls, ~walls, resolution_m=0.25), 0.1), 0.25)
+    >>> p = TacticsParams()
+    >>> flame = np.array([[5.0, 5.5]])  # 0.5 m ahead, 30 deg to the left
+    >>> w, on, wet = fight_through(np.array([4.57, 5.25, 0.0]), flame, np.zeros((0, 0)), cm, p)
+    >>> bool(w > 0.0), on  # turns to it; not yet facing it
+    (True, False)
+    >>> w, on, wet = fight_through(np.array([4.57, 5.25, np.pi / 6]), flame, wet, cm, p)
+    >>> on, bool(wet.max() > 0.0)
+    (True, True)
+    """
+    f = np.asarray(flames_xy_m, dtype=float).reshape(-1, 2)
+    w_max = params.nav.dwa.omega_max_rad_s
+    d = np.hypot(f[:, 0] - pose[0], f[:, 1] - pose[1])
+    if len(f) == 0 or d.min() > params.flame_guard_m:
+        return 0.0, False, wet_l_m2
+    near = f[int(np.argmin(d))]
+    err = float(
+        (math.atan2(near[1] - pose[1], near[0] - pose[0]) - pose[2] + math.pi) % (2 * math.pi)
+        - math.pi
+    )
+    omega = float(np.clip(params.face_gain * err, -w_max, w_max))
+    half = params.spray_half_angle_rad
+    if abs(err) > half:
+        return omega, False, wet_l_m2
+    rows, cols = cone_cells(cm, pose, params.spray_range_m, half)
+    if not wets_flames(wet_l_m2, cm, rows, cols, f, params.soak_l_m2, params.front_m):
+        return omega, False, wet_l_m2
+    return omega, True, add_water(wet_l_m2, cm, rows, cols, params.flow_l_s * params.nav_period_s)

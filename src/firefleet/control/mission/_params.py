@@ -221,7 +221,7 @@ class TacticsParams:
     fire_block_m: float = 0.75
     reslot_s: float = 4.0
     retreat_c: float = 200.0
-    flame_c: float = 300.0
+    flame_c: float = 430.0
     flame_guard_m: float = 0.8
     soak_l_m2: float = SprayParams.critical_l_m2  # the world's water per area (Drysdale)
     front_m: float = 1.0

@@ -18,6 +18,7 @@ from firefleet.control.mission._explore import explore_views, scan_turn
 from firefleet.control.mission._fight import (
     dry_flames,
     fight_goals,
+    fight_through,
     fire_costmap,
     flame_guard,
 )
@@ -353,6 +354,7 @@ def _orders(
         # mission-office seed 1 two were held in the fire's room by the flames at its door)
         who = mode != REFILL
         if who.any():
+            before = v.copy()
             v[who], w[who] = flame_guard(
                 v[who],
                 w[who],
@@ -362,6 +364,13 @@ def _orders(
                 math.radians(60.0),
                 w_max,
             )
+            # a fighter held with water sprays its way on (``fight_through``)
+            held = (mode == FIGHT) & (before > 0.0) & (v == 0.0) & (obs.tank_l > 0.0) & ~spray
+            wet = state.knowledge.wet_l_m2
+            for i in map(int, np.flatnonzero(held)):
+                w[i], spray[i], wet = fight_through(pose[i], flames, wet, state.coarse, params)
+            if (held & spray).any():
+                state = replace(state, knowledge=replace(state.knowledge, wet_l_m2=wet))
     nav = replace(nav, command=np.stack([v, w], axis=1))
     orders = Orders(
         v_m_s=v,

@@ -68,6 +68,15 @@ class DetectionParams:
         or above are exempt).
     destripe : bool
         Remove column stripes first.
+    flame_core_c : float or None
+        ``None`` (default): a fire region is one detection. Else a fire region holding
+        pixels at or above this [C] is reported as its *flame cores* instead, one
+        detection per connected group of them, each with its own bearing and range:
+        the hot gas a fire pushes out of a room reads above ``fire_min_c`` over much
+        of a frame that looks at the room's door, and one region over all of it has
+        its centroid and median depth on the gas and the walls near the camera, not on
+        the flames (the Lepton's low-gain range saturates at about 450 C; flames read
+        there, the gas less).
 
     Examples
     --------
@@ -98,6 +107,7 @@ class DetectionParams:
     depth_sigma_rel: float = 0.02
     median_size: int = 3
     destripe: bool = True
+    flame_core_c: float | None = None
 
     def __post_init__(self) -> None:
         check_fields(
@@ -124,6 +134,13 @@ class DetectionParams:
             check_fields(self, "detection", positive=("fire_width_m",))
         if self.background_px is not None:
             check_fields(self, "detection", positive=("background_px",))
+        if self.flame_core_c is not None:
+            check_fields(self, "detection", positive=("flame_core_c",))
+            if self.flame_core_c < self.fire_min_c:
+                raise InputError(
+                    f"detection.flame_core_c {self.flame_core_c} must be at least "
+                    f"fire_min_c {self.fire_min_c}"
+                )
         if self.fire_width_sigma_m is not None:
             check_fields(self, "detection", non_negative=("fire_width_sigma_m",))
         if not self.person_min_c < self.person_max_c:
@@ -445,10 +462,44 @@ def detect(
             )
             if stats[15] > 0.5:  # band_radiance's table does not reach
                 raise InputError(f"temperatures must be finite, in [{table_c[0]}, {table_c[-1]}] C")
+            if stats[6] > 0.5 and p.flame_core_c is not None and stats[0] >= p.flame_core_c:
+                core_labels, core_boxes = _flame_cores(f, labels == int(i) + 1, p)
+                for j, cb in enumerate(core_boxes):
+                    core = describe_region(
+                        f, core_labels, low, j + 1, cb, background, p.fire_min_c,
+                        p.fire_contrast_min_c, p.fire_contrast_k, table_c, table_rad,
+                        depth_arr, has_depth,
+                    )  # fmt: skip
+                    cbox = (int(cb[0]), int(cb[1]), int(cb[2]), int(cb[3]))
+                    found.append(_describe(core, cbox, f.shape, cam, p))
+                if len(core_boxes):
+                    continue
             found.append(_describe(stats, box, f.shape, cam, p))
     order = {"fire": 0, "person": 1, "warm": 2}
     found.sort(key=lambda d: (order[d.kind], -d.peak_c))
     return FrameDetections(detections=tuple(found), background_c=background, filtered_c=f)
+
+
+def _flame_cores(
+    f: FloatArray, region: np.ndarray, p: DetectionParams
+) -> tuple[np.ndarray, np.ndarray]:
+    """The flame cores of a fire region (``DetectionParams.flame_core_c``): labels (H, W)
+    of the 8-connected groups of its pixels at or above ``flame_core_c`` with at least
+    ``min_area_px`` pixels (1..K, 0 elsewhere), and their boxes (K, 4) [r0, c0, r1, c1)."""
+    import scipy.ndimage as ndi
+
+    assert p.flame_core_c is not None
+    lab, k = ndi.label(region & (f >= p.flame_core_c), structure=np.ones((3, 3), dtype=bool))
+    sizes = np.bincount(lab.ravel(), minlength=k + 1)
+    big = np.flatnonzero(sizes[1:] >= p.min_area_px) + 1
+    out = np.zeros(f.shape, dtype=np.int32)  # as ``find_regions``' labels
+    boxes = np.zeros((len(big), 4), dtype=np.int64)
+    slices = ndi.find_objects(lab)
+    for j, old in enumerate(big):
+        out[lab == old] = j + 1
+        rs, cs = slices[old - 1]
+        boxes[j] = (rs.start, cs.start, rs.stop, cs.stop)
+    return out, boxes
 
 
 def _describe(
