@@ -114,8 +114,9 @@ def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
 def known_clear(state: TacticsState, pose: FloatArray, params: TacticsParams) -> BoolArray:
     """Coarse cells (Hc, Wc) the team knows to be clear of fire now: in a thermal
     camera's view within ``scout_stale_s`` (a fire there would have been detected; the
-    flames it did detect keep the slots off by themselves), or within ``standoff_m`` of
-    a robot (its probe reads the air there).
+    flames it did detect keep the slots off by themselves), within ``standoff_m`` of a
+    robot (its probe reads the air there), or farther than ``spray_range_m`` from every
+    fire spot the team believes.
 
     A fighter's slot and a scout's viewpoint lie on such cells only. The flames the team
     places are a few points of what burns: a room the fire fills is seen through its
@@ -136,9 +137,14 @@ def known_clear(state: TacticsState, pose: FloatArray, params: TacticsParams) ->
     >>> p = TacticsParams()
     >>> pose = np.array([[1.0, 2.5, 0.0]])
     >>> state = tactics_init(grid, pose, p)
-    >>> clear = known_clear(state, pose, p)  # nothing seen yet: only about the robot
-    >>> bool(clear[10, 4]), bool(clear[10, 20])
-    (True, False)
+    >>> bool(known_clear(state, pose, p).all())  # no fire known: all clear
+    True
+    >>> from dataclasses import replace
+    >>> k = replace(state.knowledge, spot_xy_m=np.array([[6.0, 2.5]]), spot_fire=np.array([0]),
+    ...             spot_flame=np.array([True]), spot_misses=np.array([0]))
+    >>> clear = known_clear(replace(state, knowledge=k), pose, p)  # nothing seen yet
+    >>> bool(clear[10, 4]), bool(clear[10, 20]), bool(clear[10, 39])  # robot, fire, far
+    (True, False, True)
     """
     cm = state.coarse
     seen = state.fire_seen_s
@@ -146,7 +152,11 @@ def known_clear(state: TacticsState, pose: FloatArray, params: TacticsParams) ->
         out: BoolArray = seen >= state.t_s - params.scout_stale_s
     else:
         out = np.zeros(cm.shape, dtype=bool)
-    return out | _near_mask(cm, pose[:, :2], params.standoff_m)
+    # farther than a jet's reach from every spot the team believes, nothing is known to
+    # burn (a team 14 m off, with nothing near the fire in view yet, must get closer:
+    # mission-smoke)
+    far = ~_near_mask(cm, state.knowledge.spot_xy_m, params.spray_range_m)
+    return out | far | _near_mask(cm, pose[:, :2], params.standoff_m)
 
 
 def _fine(coarse: BoolArray, cm: CoarseMap, shape: tuple[int, ...]) -> BoolArray:
@@ -200,8 +210,11 @@ def fight_goals(
             # (except round the robots: one near a fire can always leave)
             blocked = np.array(state.nav.costmap.blocked)
             if params.fire_block_m > 0.0:
-                # the flames not soaked (a soaked door is a way in: :func:`dry_flames`)
-                spots = dry_flames(state, params)
+                # every flame the team believes, soaked ones too, until a look finds
+                # it out: a soaked door is no way in while the room behind it burns
+                # (mission-office seeds 0, 1, 3, 4: fighters sent through a door whose
+                # flames the ledger held soaked were damaged in it at 123-349 s)
+                spots = state.knowledge.spot_xy_m[state.knowledge.spot_flame]
                 grid = state.nav.costmap.grid
                 blocked |= _disc_mask(grid, spots, params.fire_block_m) & ~_disc_mask(
                     grid, pose[:, :2], 1.0
@@ -237,6 +250,12 @@ def fight_goals(
             flames_all = state.knowledge.spot_xy_m[state.knowledge.spot_flame]
             keep_off = _near_mask(cm, flames_all, params.scout_near_m)
             keep_off |= ~known_clear(state, pose, params)
+            if reach is not None:  # and where it can get to
+                gc = cm.goal_cell
+                ok_cell = (gc[..., 0] >= 0) & reach[
+                    np.maximum(gc[..., 0], 0), np.maximum(gc[..., 1], 0)
+                ]
+                keep_off |= ~ok_cell
             keep_off |= _near_mask(cm, avoid, params.standoff_m)
             look = scout_goals(
                 cm,
@@ -258,11 +277,17 @@ def fight_goals(
                 # nothing left to look at: the ring about the (soaked) flames, as before
                 goals[rest] = _ring(state, pose[rest, :2], aim, avoid, reach, params)
             if len(rest):
-                # no valid slot and nothing to look from: it stays where it is (clear,
-                # by its probe), and sprays what it has a shot at from there
+                # no valid slot and nothing to look from, by the fire: it stays where
+                # it is (clear, by its probe) and sprays what it has a shot at from
+                # there (farther off, the slot still brings it closer: mission-smoke's
+                # team, 14 m off, stood in a door for good and blocked it)
                 bad = ~_standable(state.nav.costmap, goals[rest]) | ~_on(
                     reach, state.nav.costmap.grid, goals[rest]
                 )
+                d = np.hypot(
+                    pose[rest, None, 0] - mine[None, :, 0], pose[rest, None, 1] - mine[None, :, 1]
+                )
+                bad &= d.min(axis=1) <= params.spray_range_m + params.standoff_m
                 goals[rest[bad]] = pose[rest[bad], :2]
 
 
