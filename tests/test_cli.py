@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import re
 import shlex
 import subprocess
 from pathlib import Path
@@ -22,6 +23,7 @@ from firefleet.cli._run import report_footer
 from firefleet.outputs import MANIFEST
 from firefleet.report.html import render_index
 from firefleet.sim.registry import task_kind
+from tests._reproduce import Reproduced
 
 GOOD = """\
 name: mine
@@ -159,11 +161,11 @@ def test_list_names_every_builtin(capsys: pytest.CaptureFixture[str]) -> None:
     assert "Figure 25" in out
 
 
-def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    out = tmp_path / "report"
-    no_data = tmp_path / "no-data"  # section 2.7 without Victoria Park: said, not failed
-    no_data.mkdir()
-    assert main(["reproduce", "--out", str(out), "--data", str(no_data)]) == 0
+def test_reproduce_writes_report(reproduced: Reproduced) -> None:
+    # one run a session (tests/conftest.py), section 2.7 without Victoria Park: said, not
+    # failed; tests/sim/test_engine.py reads the built-ins' claims from the same run
+    out, no_data = reproduced.out, reproduced.no_data
+    assert reproduced.status == 0
     index = (out / "index.html").read_text()
     for figure, name in (("Figure 24", "motor-open-loop"), ("Figure 25", "motor-pid")):
         assert figure in index
@@ -183,12 +185,23 @@ def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[s
     )
     documents = [json.loads(p.read_text()) for p in out.glob("*/metrics.json")]
     missions = [n for n in builtin_names() if load_scenario(n).command.kind == "mission"]
-    assert missions  # their claims are checked here only (tests/sim/test_engine.py)
-    for name in missions:
+    assert {"mission-smoke", "mission-warehouse"} <= set(missions)
+    for name in missions:  # their claims are checked here only (tests/sim/test_engine.py)
         doc = json.loads((out / name / "metrics.json").read_text())
         assert set(load_scenario(name).metric_names) <= set(doc)
         assert doc["claims"]
         assert all(c["passed"] for c in doc["claims"]), doc["claims"]
+    # the missions side by side beyond the deliverable, each with its animation
+    beyond = index.split("<h2 class=part>Beyond the deliverable")[1]
+    shown = re.findall(r'<section id="([^"]+)">', beyond)
+    first = shown.index(missions[0])
+    assert shown[first : first + len(missions)] == missions  # next to each other
+    for name in missions:
+        section = beyond[beyond.index(f'<section id="{name}">') :].split("</section>")[0]
+        assert "beyond the deliverable: the mission" in section
+        assert f'src="{name}/mission.gif"' in section
+        assert (out / name / "mission.gif").read_bytes()[:6] == b"GIF89a"
+        assert (out / name / "mission.png").is_file()
     total = sum(len(d["claims"]) for d in documents)
     assert total > scenario_claims >= 25
     assert f"{total} of {total} claims passed" in index
@@ -198,7 +211,7 @@ def test_reproduce_writes_report(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert f"Made by: firefleet reproduce --out {out} --data {no_data}." in index
     assert "Seeds: " in index
     assert "FAILED" not in index
-    assert str((out / "index.html").resolve()) in capsys.readouterr().out
+    assert str((out / "index.html").resolve()) in reproduced.stdout
 
 
 def test_run_path_following_writes_per_robot_metrics(

@@ -1,0 +1,68 @@
+"""Fixtures shared across the test folders: the reproduction report, made once a session.
+
+``firefleet reproduce`` runs every built-in scenario (each one's claims, figures and
+``metrics.json``), the deliverable's section 2.7 and the link study: minutes of the
+suite. The report's test (``tests/test_cli.py::test_reproduce_writes_report``) and the
+built-ins' claim checks (``tests/sim/test_engine.py``) read the same run, so each
+built-in is simulated once per session, not twice.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+
+from tests._reproduce import Reproduced
+
+REPORT_TEST = ("test_cli.py", "test_reproduce_writes_report")
+"""The test that runs the whole report (file name, function name)."""
+
+
+@pytest.fixture(scope="session")
+def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Reproduced:
+    """The report, made once: section 2.7 without Victoria Park (an empty data folder)."""
+    from firefleet.cli import main
+
+    root = tmp_path_factory.mktemp("reproduce")
+    out = root / "report"
+    no_data = root / "no-data"  # section 2.7 without Victoria Park: said, not failed
+    no_data.mkdir()
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        status = main(["reproduce", "--out", str(out), "--data", str(no_data)])
+    return Reproduced(out=out, no_data=no_data, status=status, stdout=printed.getvalue())
+
+
+def _runs_the_report(session: pytest.Session) -> bool:
+    return any((item.path.name, item.name) == REPORT_TEST for item in session.items)
+
+
+@pytest.fixture(scope="session")
+def builtin_document(request: pytest.FixtureRequest) -> Callable[[str], dict[str, Any]]:
+    """A built-in scenario's ``metrics.json`` document (its metrics and checked claims) at
+    its own seed: read from the session's report when the session runs the report's
+    test (the same run, by the same functions), else simulated here."""
+    if _runs_the_report(request.session):
+        out = request.getfixturevalue("reproduced").out
+
+        def from_report(name: str) -> dict[str, Any]:
+            document: dict[str, Any] = json.loads((out / name / "metrics.json").read_text())
+            document.pop("provenance")
+            return document
+
+        return from_report
+
+    from firefleet import compute_metrics, load_scenario, simulate
+    from firefleet.sim.metrics import metrics_document
+
+    def simulated(name: str) -> dict[str, Any]:
+        scenario = load_scenario(name)
+        metrics = compute_metrics(simulate(scenario))
+        return metrics_document(scenario.name, scenario.claims, metrics)
+
+    return simulated
