@@ -59,3 +59,21 @@ def test_no_flame_in_the_guard_or_every_cell_soaked_no_spray() -> None:
     w, on, wet = fight_through(pose, np.array([[4.6, 5.0]]), soaked, cm, P)
     assert not on
     assert wet is soaked
+
+
+def test_a_fighter_without_a_valid_slot_goes_to_the_nearest_free_cell() -> None:
+    from firefleet.control.mission._fight import _nearest_cell
+
+    cm = _open()
+    free = np.zeros(cm.shape, dtype=bool)
+    free[10, 30] = free[30, 10] = True  # two free cells, by hand
+    to = np.array([[7.0, 7.0], [2.0, 1.0], [np.nan, np.nan]])
+    fallback = np.array([[0.0, 0.0], [0.0, 0.0], [7.6, 7.4]])
+    got = _nearest_cell(cm, free, to, fallback)
+    near_a = cm.goal_xy(np.array([[10, 30]]))[0]  # (7.625, 7.375)
+    near_b = cm.goal_xy(np.array([[30, 10]]))[0]  # (2.625, 2.375)
+    assert got[0] == pytest.approx(near_a)
+    assert got[1] == pytest.approx(near_b)
+    assert got[2] == pytest.approx(near_a)  # NaN: nearest its fallback
+    none = _nearest_cell(cm, np.zeros(cm.shape, dtype=bool), to, fallback)
+    assert none == pytest.approx(fallback)

@@ -77,6 +77,23 @@ def _on(mask: BoolArray | None, grid: OccupancyGrid, xy_m: FloatArray) -> BoolAr
     return out
 
 
+def _nearest_cell(
+    cm: CoarseMap, free: BoolArray, to_xy_m: FloatArray, fallback_xy_m: FloatArray
+) -> FloatArray:
+    """Goal points (M, 2) [m] of the standable coarse cells of ``free`` (Hc, Wc) nearest
+    each point of ``to_xy_m`` (M, 2) (NaN: nearest the fallback); the fallback points
+    where no cell is free."""
+    cells = np.argwhere(free & cm.standable)
+    if len(cells) == 0:
+        out0: FloatArray = np.array(fallback_xy_m, dtype=float, copy=True)
+        return out0
+    xy = cm.goal_xy(cells)
+    to = np.where(np.isfinite(to_xy_m), to_xy_m, fallback_xy_m)
+    d = np.hypot(to[:, None, 0] - xy[None, :, 0], to[:, None, 1] - xy[None, :, 1])
+    out: FloatArray = xy[np.argmin(d, axis=1)]
+    return out
+
+
 def _standable(costmap: Costmap, xy_m: FloatArray) -> BoolArray:
     """Points (M, 2) [m] on the map and open in the costmap."""
     grid = costmap.grid
@@ -277,18 +294,19 @@ def fight_goals(
                 # nothing left to look at: the ring about the (soaked) flames, as before
                 goals[rest] = _ring(state, pose[rest, :2], aim, avoid, reach, params)
             if len(rest):
-                # no valid slot and nothing to look from, by the fire: it stays where
-                # it is (clear, by its probe) and sprays what it has a shot at from
-                # there (farther off, the slot still brings it closer: mission-smoke's
-                # team, 14 m off, stood in a door for good and blocked it)
+                # no valid slot and nothing to look from: the nearest place to its slot
+                # it can reach, known clear and standoff_m from every believed flame
+                # (standing where it was let the fire reach two fighters on
+                # mission-warehouse seed 0; a slot kept in a room the fire filled sent
+                # fighters through its door on mission-office)
                 bad = ~_standable(state.nav.costmap, goals[rest]) | ~_on(
                     reach, state.nav.costmap.grid, goals[rest]
                 )
-                d = np.hypot(
-                    pose[rest, None, 0] - mine[None, :, 0], pose[rest, None, 1] - mine[None, :, 1]
-                )
-                bad &= d.min(axis=1) <= params.spray_range_m + params.standoff_m
-                goals[rest[bad]] = pose[rest[bad], :2]
+                if bad.any():
+                    free = ~keep_off & ~_near_mask(cm, flames_all, params.standoff_m)
+                    goals[rest[bad]] = _nearest_cell(
+                        cm, free, goals[rest[bad]], pose[rest[bad], :2]
+                    )
 
 
 def _ring(
