@@ -18,6 +18,7 @@ length, :meth:`PlanarPath.pose_at`; the nearest arc length to a point,
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -156,11 +157,38 @@ class PlanarPath:
     def pose_at(self, s_m: ArrayLike) -> FloatArray:
         """Point and heading at arc lengths ``s_m`` (clamped to the path), shape (..., 3):
         x [m], y [m], heading [rad] in [-pi, pi)."""
+        if isinstance(s_m, float) and math.isfinite(s_m):  # one arc length: no arrays
+            return self._pose_at_one(s_m)
         s = np.clip(np.asarray(s_m, dtype=float), 0.0, self.length_m)
         k = np.clip(
             np.searchsorted(self._s0, s, side="right") - 1, 0, len(self.length_m_pieces) - 1
         )
         return self._piece_pose(k, s - self._s0[k])
+
+    @cached_property
+    def _s0_list(self) -> list[float]:
+        return [float(v) for v in self._s0]
+
+    def _pose_at_one(self, s_m: float) -> FloatArray:
+        """:meth:`pose_at` of one finite arc length, shape (3,): the same operations on
+        the same float64 scalars as the array form (the navigation's lookahead point,
+        once per robot and control period), without its arrays."""
+        s0 = self._s0_list
+        s = min(max(s_m, 0.0), s0[-1])
+        k = min(max(bisect.bisect_right(s0, s) - 1, 0), len(s0) - 2)
+        t = np.float64(s) - self._s0[k]
+        th0 = self.heading_rad[k]
+        kap = self.curvature_1_m[k]
+        x0, y0 = self.start_m[k, 0], self.start_m[k, 1]
+        if abs(kap) < _TINY:
+            x = x0 + t * np.cos(th0)
+            y = y0 + t * np.sin(th0)
+        else:
+            th = th0 + kap * t
+            x = x0 + (np.sin(th) - np.sin(th0)) / kap
+            y = y0 - (np.cos(th) - np.cos(th0)) / kap
+        th = th0 + kap * t
+        return np.array([x, y, (th + np.pi) % (2.0 * np.pi) - np.pi])
 
     def curvature_at(self, s_m: ArrayLike) -> FloatArray:
         """Curvature at arc lengths ``s_m`` [1/m] (the piece's on its left end)."""

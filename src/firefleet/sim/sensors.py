@@ -289,9 +289,11 @@ def _camera_output(
     return np.asarray(temp, dtype=np.float64)
 
 
+@functools.lru_cache(maxsize=16)
 def _ray_grid(prm: ThermalCameraParams) -> tuple[FloatArray, FloatArray]:
     """Normalised coordinates of the ``supersample^2`` rays of every pixel: ``xn`` of the
-    (W s) sub-columns and ``yn`` of the (H s) sub-rows (an undistorted camera)."""
+    (W s) sub-columns and ``yn`` of the (H s) sub-rows (an undistorted camera); made once
+    per camera (every frame of a run casts the same rays; not to be written to)."""
     cam = prm.camera
     s = prm.supersample
     sub = (np.arange(s) + 0.5) / s - 0.5

@@ -50,7 +50,7 @@ from numpy.typing import ArrayLike
 
 from firefleet._typing import BoolArray, FloatArray
 from firefleet.errors import InputError, check_fields
-from firefleet.world._stencil import neighbour_sum
+from firefleet.world._fire_kernel import advance, candidates
 
 __all__ = [
     "BURNING",
@@ -210,26 +210,26 @@ def fire_step(
             f"spread_m_s {params.spread_m_s:g}: at most {MAX_RATE_STEP / rate0_hz:g} s "
             "(a longer step makes the front square, not round)"
         )
-    burning = fire.state == BURNING
-    near = neighbour_sum(burning.astype(float), _DIAGONAL)
-    u = rng.random(fire.state.shape)
+    state0 = np.ascontiguousarray(fire.state)
+    fuel = np.ascontiguousarray(fire.fuel, dtype=np.float64)
     # only an unburnt cell with fuel and a burning neighbour can ignite (elsewhere the
     # probability is 0): the law on those cells alone, element by element the same
-    cand = np.flatnonzero(((fire.state == UNBURNT) & (fire.fuel > 0.0) & (near > 0.0)).ravel())
+    # (the neighbour sums and the state update: compiled passes, ``_fire_kernel``)
+    cand, near = candidates(state0, fuel, _DIAGONAL)
+    u = rng.random(fire.state.shape)
     # log of the probability that no burning neighbour ignites the cell this step
-    log_no = -rate0_hz * dt_s * near.ravel()[cand]
-    factor = 1.0 + np.clip(params.fuel_factor * (fire.fuel.ravel()[cand] - 1.0), -0.9, 1.0)
+    log_no = -rate0_hz * dt_s * near
+    factor = 1.0 + np.clip(params.fuel_factor * (fuel.ravel()[cand] - 1.0), -0.9, 1.0)
     p_ignite = -np.expm1(log_no * factor)
-    ignites = np.zeros(fire.state.shape, dtype=bool)
-    ignites.ravel()[cand[u.ravel()[cand] < p_ignite]] = True
-
-    burn_left = fire.burn_left_s - np.where(burning, dt_s, 0.0)
-    burns_out = burning & (burn_left <= 1e-9)
-    state = fire.state.copy()
-    state[burns_out] = BURNT
-    state[ignites] = BURNING
-    burn_left = np.where(burns_out, 0.0, burn_left)
-    burn_left = np.where(ignites, params.burn_s_per_fuel * fire.fuel, burn_left)
+    ignites = cand[u.ravel()[cand] < p_ignite]
+    state, burn_left = advance(
+        state0,
+        np.ascontiguousarray(fire.burn_left_s, dtype=np.float64),
+        fuel,
+        ignites,
+        float(dt_s),
+        float(params.burn_s_per_fuel),
+    )
     return FireState(state=state, burn_left_s=burn_left, fuel=fire.fuel)
 
 

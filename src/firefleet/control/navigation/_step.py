@@ -320,17 +320,20 @@ def navigation_step(
     dx = pose[:, None, 0] - pose[None, :, 0]
     dy = pose[:, None, 1] - pose[None, :, 1]
     maybe = dx * dx + dy * dy <= (near_by * (1.0 + 1e-6)) ** 2
+    px, py = pose[:, 0].tolist(), pose[:, 1].tolist()  # the pairs' distances in floats
+    aside_list = aside.tolist()  # kept with ``aside`` (set below for i as its turn ends)
+    is_active = active.tolist()
     for i in map(int, np.nonzero(active)[0]):
         if aside[i] >= 0:
             continue  # already on its way out of a teammate's way: it does not stop
         mine = np.ascontiguousarray(samples[i][index[i] : index[i] + ahead, :2])
         me = np.ascontiguousarray(pose[i, :2])
         for j in map(int, np.flatnonzero(maybe[i, :i])):
-            if not active[j] or len(mine) == 0:
+            if not is_active[j] or len(mine) == 0:
                 continue
-            if math.hypot(*(pose[i, :2] - pose[j, :2])) > near_by:
+            if math.hypot(px[i] - px[j], py[i] - py[j]) > near_by:
                 continue
-            if aside[j] == i:
+            if aside_list[j] == i:
                 continue  # it makes way for me
             theirs = theirs_of.get(j)
             if theirs is None:
@@ -343,7 +346,7 @@ def navigation_step(
                 rest = np.vstack([pose[j : j + 1, :2], samples[j][index[j] :: 2, :2]])
                 spot = _aside_spot(state, params, pose, mates, i, j, rest, gap)
                 if spot is not None:
-                    aside[i] = j
+                    aside[i] = aside_list[i] = j
                     target[i] = spot
                     replan(i, with_mates=True)
                     index[i] = 0
