@@ -191,6 +191,10 @@ class TacticsParams:
         place [m] (:mod:`._keepout`; 0: not at all).
     hot_cost : float
         That price per metre (the map's free cells cost 1 per metre).
+    spare_fight : bool
+        Robots with nothing left to explore join a burning fire past
+        ``fire_robots_max`` (:mod:`._spare`; default off until measured on every
+        built-in).
     """
 
     standoff_m: float = 1.5
@@ -258,6 +262,8 @@ class TacticsParams:
     # route
     hot_keepout_m: float = 1.0
     hot_cost: float = 20.0
+    # untuned2
+    spare_fight: bool = False
 
     def __post_init__(self) -> None:
         check_fields(

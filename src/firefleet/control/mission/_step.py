@@ -46,6 +46,7 @@ from firefleet.control.mission._plan import (
 from firefleet.control.mission._quiet import EPS_S as _EPS_S
 from firefleet.control.mission._quiet import is_quiet
 from firefleet.control.mission._scout import seen_update
+from firefleet.control.mission._spare import spare_demand
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.mission._upkeep import (
     dropped,
@@ -118,6 +119,9 @@ def _plan(
         # floor left to search: keep explore_frac of the team exploring
         n_work = int((working & (state.mode != REFILL)).sum())
         need = cut_demand(need, len(open_v), n_work, params)
+    if params.spare_fight:  # robots with nothing left to search join the fires (_spare)
+        spare = working & (state.mode == IDLE) & (tank > 0.05 * params.tank_l)
+        need = spare_demand(need, fext, ids, state.task_fire, spare, params)
     demand = np.concatenate([need, np.ones(len(open_v), dtype=np.int64)])
     is_fire = np.arange(len(task_xy)) < n_fires
     current = np.full(n, -1, dtype=np.int64)
