@@ -49,7 +49,14 @@ from rich.table import Table
 
 from _harness import Floor, Row, TopicResult
 
-OFFICE = Path(__file__).resolve().parent.parent / "examples" / "missions" / "mission-office.yaml"
+OFFICE = (
+    Path(__file__).resolve().parent.parent
+    / "src"
+    / "firefleet"
+    / "scenarios"
+    / "builtin"
+    / "mission-office.yaml"
+)
 """mission-office, kept in examples/ until its claims pass for seeds 0-4."""
 OFFICE_S = 60.0
 """Simulated seconds of mission-office per timed run."""

@@ -69,9 +69,7 @@ def test_mission_with_stretches_equals_the_tick_by_tick_loop(
     the contact test) with the quiet stretches and without: every array equal, and the
     stretches covered most ticks (74 %: those after a tick that changed the decision's
     state and those with a range scan too; 50 % without either)."""
-    scenario = dataclasses.replace(
-        firefleet.load_scenario("examples/missions/mission-office.yaml"), duration_s=12.0
-    )
+    scenario = dataclasses.replace(firefleet.load_scenario("mission-office"), duration_s=12.0)
     ticks = []
     real = qs.stretch_drive
 

@@ -49,9 +49,7 @@ def test_contact_log_equals_the_test_on_every_tick() -> None:
 
 
 def test_mission_records_its_robots_at_ten_hertz() -> None:
-    scenario = dataclasses.replace(
-        firefleet.load_scenario("examples/missions/mission-office.yaml"), duration_s=1.05
-    )
+    scenario = dataclasses.replace(firefleet.load_scenario("mission-office"), duration_s=1.05)
     result = firefleet.simulate(scenario)
     assert np.allclose(result.t, [*np.arange(0.0, 1.01, 0.1), 1.05])
     assert result.pose.shape == (12, 3, 3)

@@ -112,7 +112,14 @@ def test_bad_mission_input_is_one_line_exit_2(
     assert lines[0].count(says.split(":")[0]) == 1, "the key is named once"
 
 
-OFFICE = Path(__file__).resolve().parents[2] / "examples" / "missions" / "mission-office.yaml"
+OFFICE = (
+    Path(__file__).resolve().parents[2]
+    / "src"
+    / "firefleet"
+    / "scenarios"
+    / "builtin"
+    / "mission-office.yaml"
+)
 
 
 def _short(name: Path, duration_s: float, **command: object) -> firefleet.Scenario:

@@ -116,6 +116,9 @@ def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
     soaked flame let through: three fighters entered the fire room's door while the
     flames beside it burned, and were damaged within 2 s of their probes reading 36-80
     C). The robots' probes and cameras still mark hot places (``_upkeep.too_hot``).
+    The flame guard and the aim use these; a fighter's slot is still reached only
+    without passing any believed flame, soaked or not, until a look finds it out
+    (:func:`fight_goals`: the room behind a soaked door may burn unseen).
     """
     k = state.knowledge
     fl = k.spot_xy_m[k.spot_flame]

@@ -123,7 +123,7 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     --------
     >>> from firefleet import load_scenario
     >>> from firefleet.sim.kinds.mission import mission_world
-    >>> world = mission_world(load_scenario("examples/missions/mission-office.yaml"))
+    >>> world = mission_world(load_scenario("mission-office"))
     >>> world.field.shape, world.field.resolution_m
     ((40, 80), 0.25)
     """
