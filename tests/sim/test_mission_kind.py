@@ -112,17 +112,10 @@ def test_bad_mission_input_is_one_line_exit_2(
     assert lines[0].count(says.split(":")[0]) == 1, "the key is named once"
 
 
-OFFICE = (
-    Path(__file__).resolve().parents[2]
-    / "src"
-    / "firefleet"
-    / "scenarios"
-    / "builtin"
-    / "mission-office.yaml"
-)
+OFFICE = "mission-office"  # built in
 
 
-def _short(name: Path, duration_s: float, **command: object) -> firefleet.Scenario:
+def _short(name: str | Path, duration_s: float, **command: object) -> firefleet.Scenario:
     scenario = firefleet.load_scenario(name)
     replace: Any = dataclasses.replace
     cmd = replace(scenario.command, **command)

@@ -217,6 +217,9 @@ def fight_goals(
     and every slot is set)."""
     ids, _, _ = fires_of(state.knowledge)
     reach: BoolArray | None = None
+    clear: BoolArray | None = None  # known_clear, once per call (with reach)
+    # every flame the team believes, soaked ones too
+    flames_all = state.knowledge.spot_xy_m[state.knowledge.spot_flame]
     near_m, shot_m = shot_limits_m(params)
     for fid in ids:
         team = np.flatnonzero(task_fire == fid)
@@ -234,13 +237,13 @@ def fight_goals(
                 # it out: a soaked door is no way in while the room behind it burns
                 # (mission-office seeds 0, 1, 3, 4: fighters sent through a door whose
                 # flames the ledger held soaked were damaged in it at 123-349 s)
-                spots = state.knowledge.spot_xy_m[state.knowledge.spot_flame]
                 grid = state.nav.costmap.grid
-                blocked |= _disc_mask(grid, spots, params.fire_block_m) & ~_disc_mask(
+                blocked |= _disc_mask(grid, flames_all, params.fire_block_m) & ~_disc_mask(
                     grid, pose[:, :2], 1.0
                 )
             reach = _reachable(blocked, state.nav.costmap.grid, pose[:, :2])
-            reach &= _fine(known_clear(state, pose, params), state.coarse, reach.shape)
+            clear = known_clear(state, pose, params)
+            reach &= _fine(clear, state.coarse, reach.shape)
         # the ring about the spots aimed at (the flames; not the hot gas, which a fire
         # pushes metres out of its room: mission-office seed 1, a ring about the gas in
         # the corridor put a fighter in the next room, without a shot, for 50 s)
@@ -267,10 +270,9 @@ def fight_goals(
             # still be deadly (mission-office seed 0, 153 s: the door's flames soaked,
             # the room behind it burning, a fighter sent to look from the doorway was
             # damaged there)
-            flames_all = state.knowledge.spot_xy_m[state.knowledge.spot_flame]
             keep_off = _near_mask(cm, flames_all, params.scout_near_m)
-            keep_off |= ~known_clear(state, pose, params)
-            if reach is not None:  # and where it can get to
+            if clear is not None and reach is not None:  # known clear, and reachable
+                keep_off |= ~clear
                 gc = cm.goal_cell
                 ok_cell = (gc[..., 0] >= 0) & reach[
                     np.maximum(gc[..., 0], 0), np.maximum(gc[..., 1], 0)
