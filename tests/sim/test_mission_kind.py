@@ -231,3 +231,31 @@ def test_detections_are_the_detectors_and_lie_where_the_heat_is() -> None:
         d = np.hypot(*(world.victim_xy_m - [row["x_m"], row["y_m"]]).T)
         assert d.min() <= 2.5, row
     assert (result.extra["fire_state"][-1] != UNBURNT).any()
+
+
+def test_the_water_on_the_floor_is_the_water_sprayed() -> None:
+    """``wet_l_m2`` in result.npz: a robot spraying 10 s at the office floor puts on the
+    cells, summed over their area, the litres its tank lost (every litre lands in the
+    cone), and the recorded water only grows."""
+    scenario = _short(OFFICE, 10.0)
+    world = mission_world(scenario)
+    state = world.init(1)
+    on = {"spray": np.ones(1, bool), "refill": np.zeros(1, bool)}
+    t_s = 0.0
+    while t_s < 10.0:
+        state = world.act(state, on, np.array([[1.0, 1.5, 0.0]]))
+        state = world.step(state, t_s)
+        t_s += world.world_step_s
+    log = world.final(state)
+    wet = np.asarray(log["wet_l_m2"], dtype=float)
+    assert wet.shape == (len(log["field_t_s"]), *world.field.shape)
+    area = world.field.resolution_m**2
+    used = float(log["water_used_l"].sum())
+    assert used > 5.0
+    assert 20.0 - float(state.tank_l[0]) == pytest.approx(used)
+    # recorded to 0.01 L/m^2 per cell, in float16 (11 significant bits)
+    cells = int(np.count_nonzero(wet[-1]))
+    tol = cells * (0.005 + float(wet[-1].max()) * 2.0**-11) * area
+    assert float(wet[-1].sum()) * area == pytest.approx(used, abs=tol)
+    assert np.all(np.diff(wet.sum(axis=(1, 2))) >= 0.0)  # it only accumulates
+    assert float(wet[0].sum()) < float(wet[-1].sum())

@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from firefleet._typing import FloatArray
+from firefleet.control.mission import TacticsParams
 from firefleet.models.pt100 import Pt100Params, pt100_read, pt100_step
 from firefleet.perception.thermal import DetectionParams, detect
 from firefleet.sim._thermal_grid import GridThermalScene
@@ -70,9 +71,9 @@ LOWER_LAYER = 0.4
 SCENE = GridThermalScene(lower_fraction=LOWER_LAYER, ambient_c=HEAT.ambient)
 """What the cameras see: the floor and the lower walls in the cooler lower layer."""
 
-DETECTION = DetectionParams(flame_core_c=430.0)
+DETECTION = DetectionParams(flame_core_c=TacticsParams().flame_c)
 """The robots' detector: the default thresholds, and a fire region holding flames
-(pixels at 430 C or more: the Lepton's low gain saturates at about 450 C; flames burn at
+(pixels at the team's ``TacticsParams.flame_c``, 430 C, or more: the Lepton's low gain saturates at about 450 C; flames burn at
 800 C) reported as its flame cores, each placed by its own bearing and stereo depth. A
 robot looking at a burning room's door sees the hot gas above ``fire_min_c`` over most
 of its frame; one region over it all put the fire on the door's frame, 1.5-3.5 m short
@@ -215,6 +216,7 @@ class MissionWorld:
             "fire_state": [],
             "temperature_c": [],
             "smoke_per_m": [],
+            "wet_l_m2": [],
             "detections": [],
             "victims_found_s": np.full(v, np.nan),
             "all_out_s": np.nan,
@@ -255,6 +257,8 @@ class MissionWorld:
         # of 400 x 400 cells: temperature 768 -> 123 MB, smoke 768 -> 65 MB)
         log["temperature_c"].append(np.round(state.temperature_c, 2).astype(np.float32))
         log["smoke_per_m"].append(np.round(state.smoke_per_m, 2).astype(np.float16))
+        # the water on the floor, to 0.01 L/m^2: where the sprays went (float16, like smoke)
+        log["wet_l_m2"].append(np.round(state.wet_l_m2, 2).astype(np.float16))
         log["next_record_s"] = log["next_record_s"] + self.record_s
 
     def quiet_ticks(self, state: MissionWorldState, k: int, dt_s: float, limit: int) -> int:
@@ -369,7 +373,8 @@ class MissionWorld:
 
     def final(self, state: MissionWorldState) -> Messages:
         """The log: ``field_t_s`` (T'), ``fire_state`` (T', H, W) int8, ``temperature_c``
-        (T', H, W) float32 and ``smoke_per_m`` float16, ``detections`` (structured), per victim
+        (T', H, W) float32, ``smoke_per_m`` [1/m] and ``wet_l_m2`` (the water sprayed on
+        each cell) [L/m^2] float16, ``detections`` (structured), per victim
         ``victims_found_s`` and ``victim_dose``, per robot ``damaged``, ``water_used_l``,
         and ``all_out_s``, ``explored_pct``, the fuel and the fires' cells; with
         ``contacts``, the robots' points near walls and who touched another robot
@@ -387,6 +392,7 @@ class MissionWorld:
             "fire_state": np.asarray(log["fire_state"], dtype=np.int8),
             "temperature_c": np.asarray(log["temperature_c"], dtype=np.float32),
             "smoke_per_m": np.asarray(log["smoke_per_m"], dtype=np.float16),
+            "wet_l_m2": np.asarray(log["wet_l_m2"], dtype=np.float16),
             "detections": det,
             "victims_found_s": log["victims_found_s"].copy(),
             "victim_dose": state.victims.dose.copy(),
