@@ -73,8 +73,9 @@ SCENE = GridThermalScene(lower_fraction=LOWER_LAYER, ambient_c=HEAT.ambient)
 
 DETECTION = DetectionParams(flame_core_c=TacticsParams().flame_c)
 """The robots' detector: the default thresholds, and a fire region holding flames
-(pixels at the team's ``TacticsParams.flame_c``, 430 C, or more: the Lepton's low gain saturates at about 450 C; flames burn at
-800 C) reported as its flame cores, each placed by its own bearing and stereo depth. A
+(pixels at the team's ``TacticsParams.flame_c``, 430 C, or more: the Lepton's low gain
+saturates at about 450 C; flames burn at 800 C) reported as its flame cores, each
+placed by its own bearing and stereo depth. A
 robot looking at a burning room's door sees the hot gas above ``fire_min_c`` over most
 of its frame; one region over it all put the fire on the door's frame, 1.5-3.5 m short
 of the flames behind it (mission-office seed 2 at 520 s)."""
