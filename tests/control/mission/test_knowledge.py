@@ -26,6 +26,7 @@ from firefleet.control.navigation import (
     navigation_retarget,
 )
 from firefleet.errors import InputError
+from firefleet.world import OccupancyGrid
 from tests.control.mission.test_team import room
 
 P = TacticsParams()
@@ -40,10 +41,12 @@ def _update(
     fires: ArrayLike = NONE2,
     people: ArrayLike = NONE2,
     looked: np.ndarray | None = None,
+    peak_c: float | None = None,
 ) -> tuple[Knowledge, bool]:
     n = len(pose)
     f = np.asarray(fires, float).reshape(-1, 2)
     q = np.asarray(people, float).reshape(-1, 2)
+    peaks = None if peak_c is None else np.full(len(f), peak_c)
     return update_knowledge(
         k,
         state.coarse,
@@ -55,6 +58,7 @@ def _update(
         np.ones(n, bool) if looked is None else looked,
         0.0,
         P,
+        fire_peak_c=peaks,
     )
 
 
@@ -95,6 +99,39 @@ def test_a_fire_looked_at_without_detection_goes_out() -> None:
     k, _ = _update(empty_knowledge(), state, looking, fires=[[4.0, 5.0]])
     for _ in range(3 * P.fire_out_looks):
         k, _ = _update(k, state, np.array([[1.5, 5.0, math.pi]]))
+    assert len(fires_of(k)[0]) == 1
+
+
+def test_a_hot_spot_a_depth_error_put_inside_a_rack_goes_out_when_its_face_is_seen() -> None:
+    """A spot without flames (the hot floor a burnt-out fire leaves) 0.2 m inside a rack
+    that lines an aisle (the detector's depth error: racks hold no fuel) goes out after
+    ``fire_out_looks`` looks down the aisle that see no fire: they see the rack's face,
+    and the spot is looked at there (no ray from the aisle reaches the spot itself). A
+    flame spot is looked at where it was placed."""
+    grid = room()
+    occ = grid.occupied.copy()
+    res = grid.resolution_m
+    occ[round(1.0 / res) : round(8.0 / res), round(4.0 / res) : round(5.5 / res)] = True  # rack
+    rack = OccupancyGrid(occ, ~occ, res, name="rack")
+    state = tactics_init(rack, [[6.5, 9.0, 0.0]], P)
+    spot = [5.3, 5.0]  # 0.2 m inside the rack's east face (x = 5.5 m)
+    gas = 0.5 * P.flame_c
+    k, _ = _update(empty_knowledge(), state, np.array([[6.5, 9.0, 0.0]]), [spot], peak_c=gas)
+    down = np.array([[6.3, 8.0, math.atan2(5.0 - 8.0, 5.3 - 6.3)]])  # 3.2 m up the aisle
+    assert not line_of_sight(state.coarse, down[:, :2], np.array([spot]))[0]
+    for i in range(P.fire_out_looks):
+        assert len(fires_of(k)[0]) == 1, i
+        k, _ = _update(k, state, down)
+    assert len(fires_of(k)[0]) == 0
+    # a detection still there keeps it
+    k, _ = _update(empty_knowledge(), state, np.array([[6.5, 9.0, 0.0]]), [spot], peak_c=gas)
+    for _ in range(2 * P.fire_out_looks):
+        k, _ = _update(k, state, down, fires=[[5.55, 5.0]], peak_c=gas)
+    assert len(fires_of(k)[0]) == 1
+    # flames there are looked at where they were placed: these looks never reach them
+    k, _ = _update(empty_knowledge(), state, np.array([[6.5, 9.0, 0.0]]), [spot])
+    for _ in range(2 * P.fire_out_looks):
+        k, _ = _update(k, state, down)
     assert len(fires_of(k)[0]) == 1
 
 

@@ -34,12 +34,36 @@ __all__ = [
 
 def _reachable(blocked: BoolArray, grid: OccupancyGrid, xy_m: FloatArray) -> BoolArray:
     """Map cells connected (8-neighbours) through unblocked cells to any of the points
-    (M, 2) [m]: where the robots there can plan to."""
+    (M, 2) [m]: where the robots there can plan to. A point on a blocked cell counts
+    from the open cell nearest it (its way out: a robot near a fire can always leave).
+
+    A robot's own way out opens nothing for the others: with every cell within 1 m of a
+    robot let through, a fighter standing in a burning room's doorway opened the door,
+    and its teammate in the corridor was sent to a slot in the room (mission-office
+    seed 2, 127 s; damaged in the door at 149 s).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from firefleet.world import OccupancyGrid
+    >>> walls = np.zeros((3, 9), dtype=bool)
+    >>> grid = OccupancyGrid(walls, ~walls, resolution_m=1.0)
+    >>> blocked = np.zeros((3, 9), dtype=bool)
+    >>> blocked[:, 3:6] = True  # a burning door, 3 cells wide, between two rooms
+    >>> reach = _reachable(blocked, grid, np.array([[3.5, 1.5], [0.5, 1.5]]))  # in it, west
+    >>> reach[1].astype(int).tolist()  # the one in the door leaves west (nearest open cell)
+    [1, 1, 1, 0, 0, 0, 0, 0, 0]
+    """
     free = ~np.asarray(blocked)
-    labels, _ = ndi.label(free, structure=np.ones((3, 3), dtype=bool))
+    labels, n = ndi.label(free, structure=np.ones((3, 3), dtype=bool))
     rc = grid.cell_of(np.asarray(xy_m, dtype=float).reshape(-1, 2))
     h, w = free.shape
-    lab = labels[np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)]
+    rc = np.stack([np.clip(rc[:, 0], 0, h - 1), np.clip(rc[:, 1], 0, w - 1)], axis=-1)
+    lab = labels[rc[:, 0], rc[:, 1]]
+    if n and (lab == 0).any():
+        _, (ri, ci) = ndi.distance_transform_edt(~free, return_indices=True)
+        out_rc = rc[lab == 0]
+        lab[lab == 0] = labels[ri[out_rc[:, 0], out_rc[:, 1]], ci[out_rc[:, 0], out_rc[:, 1]]]
     lab = lab[lab > 0]
     out: BoolArray = np.isin(labels, lab) if len(lab) else free
     return out
@@ -229,8 +253,8 @@ def fight_goals(
         if same and np.isfinite(goals[team, 0]).all():
             continue
         if reach is None:
-            # reachable without crossing the cells within fire_block_m of a spot
-            # (except round the robots: one near a fire can always leave)
+            # reachable without crossing the cells within fire_block_m of a spot (a
+            # robot among them counts from its way out, ``_reachable``)
             blocked = np.array(state.nav.costmap.blocked)
             if params.fire_block_m > 0.0:
                 # every flame the team believes, soaked ones too, until a look finds
@@ -238,9 +262,7 @@ def fight_goals(
                 # (mission-office seeds 0, 1, 3, 4: fighters sent through a door whose
                 # flames the ledger held soaked were damaged in it at 123-349 s)
                 grid = state.nav.costmap.grid
-                blocked |= _disc_mask(grid, flames_all, params.fire_block_m) & ~_disc_mask(
-                    grid, pose[:, :2], 1.0
-                )
+                blocked |= _disc_mask(grid, flames_all, params.fire_block_m)
             reach = _reachable(blocked, state.nav.costmap.grid, pose[:, :2])
             clear = known_clear(state, pose, params)
             reach &= _fine(clear, state.coarse, reach.shape)

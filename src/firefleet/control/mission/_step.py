@@ -58,6 +58,7 @@ from firefleet.control.mission._upkeep import (
 )
 from firefleet.control.mission._water import (
     add_water,
+    aim_wets,
     cone_cells,
     front_aim,
     wets_flames,
@@ -262,8 +263,20 @@ def _orders(
         )
         if aim is not None:
             target = aim
+            # a shot: a flame in the jet's reach, and the cone on the aim's bearing
+            # wets a dry cell at the flames (``aim_wets``: the spray's own test)
             d = np.hypot(spots[:, 0] - pose[i, 0], spots[:, 1] - pose[i, 1])
-            if (d <= params.spray_range_m).any():  # a flame in reach: a shot
+            if (d <= params.spray_range_m).any() and aim_wets(
+                wet,
+                state.coarse,
+                pose[i, :2],
+                aim,
+                spots,
+                params.spray_range_m,
+                half,
+                params.soak_l_m2,
+                params.front_m,
+            ):
                 shot_s[i] = obs.t_s
                 # held up on its way (no closer in the navigation's stuck time) with a
                 # shot already: it stops there and sprays

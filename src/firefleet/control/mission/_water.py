@@ -27,6 +27,7 @@ from firefleet.control.mission._coverage import CoarseMap, line_of_sight
 
 __all__ = [
     "add_water",
+    "aim_wets",
     "cone_cells",
     "front_aim",
     "soaked_at",
@@ -165,6 +166,49 @@ def wets_flames(
     xy = cm.centre_xy(np.stack([rows, cols], axis=-1))
     d = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1])
     return bool((d <= radius_m).any())
+
+
+def aim_wets(
+    wet_l_m2: FloatArray,
+    cm: CoarseMap,
+    xy_m: FloatArray,
+    aim_xy_m: FloatArray,
+    flames_xy_m: FloatArray,
+    reach_m: float,
+    half_angle_rad: float,
+    soak_l_m2: float,
+    front_m: float,
+) -> bool:
+    """Whether a nozzle at ``xy_m`` (2,) [m] turned to ``aim_xy_m`` (2,) would wet a cell
+    the ledger does not hold soaked within ``front_m`` of a believed flame (F, 2): a
+    fighter's shot (:func:`wets_flames` on that cone, the test its spray makes).
+
+    A flame merely within reach is no shot: the cells about it may be soaked, or out
+    of the jet's sight past a corner (mission-warehouse seed 3: a fighter stood from
+    280 s to the end at a rack's corner, 2.4 m from a soaked flame, the dry front 3.3 m
+    off past the corner, counted as having a shot, never re-slotted, never spraying).
+
+    Examples
+    --------
+    >>> import math
+    >>> import numpy as np
+    >>> from firefleet.control.mission._coverage import coarse_map
+    >>> from firefleet.control.navigation import build_costmap
+    >>> from firefleet.world import OccupancyGrid
+    >>> walls = np.zeros((20, 40), dtype=bool)
+    >>> cm = coarse_map(build_costmap(OccupancyGrid(walls, ~walls, resolution_m=0.25), 0.1), 0.25)
+    >>> flame, me = np.array([[4.0, 2.5]]), np.array([2.0, 2.5])
+    >>> args = (3.0, math.radians(15.0), 1.3, 0.5)
+    >>> aim_wets(np.zeros((0, 0)), cm, me, flame[0], flame, *args)  # a dry flame 2 m off
+    True
+    >>> soaked = np.full(cm.shape, 2.0)
+    >>> aim_wets(soaked, cm, me, flame[0], flame, *args)  # in reach, but all soaked
+    False
+    """
+    heading = math.atan2(float(aim_xy_m[1] - xy_m[1]), float(aim_xy_m[0] - xy_m[0]))
+    pose = np.array([float(xy_m[0]), float(xy_m[1]), heading])
+    rows, cols = cone_cells(cm, pose, reach_m, half_angle_rad)
+    return wets_flames(wet_l_m2, cm, rows, cols, flames_xy_m, soak_l_m2, front_m)
 
 
 def front_aim(
