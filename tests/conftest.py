@@ -4,7 +4,9 @@
 ``metrics.json``), the deliverable's section 2.7 and the link study: minutes of the
 suite. The report's test (``tests/test_cli.py::test_reproduce_writes_report``) and the
 built-ins' claim checks (``tests/sim/test_engine.py``) read the same run, so each
-built-in is simulated once per session, not twice.
+built-in is simulated once per session, not twice. The report runs its experiments in
+``REPORT_WORKERS`` processes (``--workers``): nothing else of the suite runs while the
+session fixture is made, so the real-time and browser tests do not share the cores.
 """
 
 from __future__ import annotations
@@ -21,11 +23,14 @@ from tests._reproduce import Reproduced
 
 REPORT_TEST = ("test_cli.py", "test_reproduce_writes_report")
 """The test that runs the whole report (file name, function name)."""
+REPORT_WORKERS = 2
+"""Processes the session's report runs its experiments in (CI's machine has 2 cores)."""
 
 
 @pytest.fixture(scope="session")
 def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Reproduced:
-    """The report, made once: section 2.7 without Victoria Park (an empty data folder)."""
+    """The report, made once: section 2.7 without Victoria Park (an empty data folder),
+    its experiments in ``REPORT_WORKERS`` processes."""
     from firefleet.cli import main
 
     root = tmp_path_factory.mktemp("reproduce")
@@ -34,8 +39,24 @@ def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Reproduced:
     no_data.mkdir()
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
-        status = main(["reproduce", "--out", str(out), "--data", str(no_data)])
-    return Reproduced(out=out, no_data=no_data, status=status, stdout=printed.getvalue())
+        status = main(
+            [
+                "reproduce",
+                "--out",
+                str(out),
+                "--data",
+                str(no_data),
+                "--workers",
+                str(REPORT_WORKERS),
+            ]
+        )
+    return Reproduced(
+        out=out,
+        no_data=no_data,
+        workers=REPORT_WORKERS,
+        status=status,
+        stdout=printed.getvalue(),
+    )
 
 
 def _runs_the_report(session: pytest.Session) -> bool:
