@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -23,8 +24,9 @@ from tests._reproduce import Reproduced
 
 REPORT_TEST = ("test_cli.py", "test_reproduce_writes_report")
 """The test that runs the whole report (file name, function name)."""
-REPORT_WORKERS = 2
-"""Processes the session's report runs its experiments in (CI's machine has 2 cores)."""
+REPORT_WORKERS = min(2, os.cpu_count() or 1)
+"""Processes the session's report runs its experiments in: 2 (CI's machine has 2 cores),
+1 on a machine with one."""
 
 
 @pytest.fixture(scope="session")
