@@ -16,6 +16,7 @@ import io
 import json
 import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -63,6 +64,16 @@ def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Reproduced:
 
 def _runs_the_report(session: pytest.Session) -> bool:
     return any((item.path.name, item.name) == REPORT_TEST for item in session.items)
+
+
+@pytest.fixture(scope="session")
+def report_out(request: pytest.FixtureRequest) -> Path | None:
+    """The session's report folder when the session runs the report's test (its runs'
+    figures, drawn by the same functions), else None (a test then makes its own)."""
+    if _runs_the_report(request.session):
+        out: Path = request.getfixturevalue("reproduced").out
+        return out
+    return None
 
 
 @pytest.fixture(scope="session")
