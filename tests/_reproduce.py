@@ -9,10 +9,11 @@ from pathlib import Path
 
 @dataclass(frozen=True)
 class Reproduced:
-    """One ``firefleet reproduce --out out --data no_data`` run: its folders, its exit
-    status and what it printed."""
+    """One ``firefleet reproduce --out out --data no_data --workers workers`` run: its
+    folders, its processes, its exit status and what it printed."""
 
     out: Path
     no_data: Path
+    workers: int
     status: int
     stdout: str

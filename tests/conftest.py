@@ -4,7 +4,9 @@
 ``metrics.json``), the deliverable's section 2.7 and the link study: minutes of the
 suite. The report's test (``tests/test_cli.py::test_reproduce_writes_report``) and the
 built-ins' claim checks (``tests/sim/test_engine.py``) read the same run, so each
-built-in is simulated once per session, not twice.
+built-in is simulated once per session, not twice. The report runs its experiments in
+``REPORT_WORKERS`` processes (``--workers``): nothing else of the suite runs while the
+session fixture is made, so the real-time and browser tests do not share the cores.
 """
 
 from __future__ import annotations
@@ -12,7 +14,9 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -21,11 +25,15 @@ from tests._reproduce import Reproduced
 
 REPORT_TEST = ("test_cli.py", "test_reproduce_writes_report")
 """The test that runs the whole report (file name, function name)."""
+REPORT_WORKERS = min(2, os.cpu_count() or 1)
+"""Processes the session's report runs its experiments in: 2 (CI's machine has 2 cores),
+1 on a machine with one."""
 
 
 @pytest.fixture(scope="session")
 def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Reproduced:
-    """The report, made once: section 2.7 without Victoria Park (an empty data folder)."""
+    """The report, made once: section 2.7 without Victoria Park (an empty data folder),
+    its experiments in ``REPORT_WORKERS`` processes."""
     from firefleet.cli import main
 
     root = tmp_path_factory.mktemp("reproduce")
@@ -34,12 +42,38 @@ def reproduced(tmp_path_factory: pytest.TempPathFactory) -> Reproduced:
     no_data.mkdir()
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
-        status = main(["reproduce", "--out", str(out), "--data", str(no_data)])
-    return Reproduced(out=out, no_data=no_data, status=status, stdout=printed.getvalue())
+        status = main(
+            [
+                "reproduce",
+                "--out",
+                str(out),
+                "--data",
+                str(no_data),
+                "--workers",
+                str(REPORT_WORKERS),
+            ]
+        )
+    return Reproduced(
+        out=out,
+        no_data=no_data,
+        workers=REPORT_WORKERS,
+        status=status,
+        stdout=printed.getvalue(),
+    )
 
 
 def _runs_the_report(session: pytest.Session) -> bool:
     return any((item.path.name, item.name) == REPORT_TEST for item in session.items)
+
+
+@pytest.fixture(scope="session")
+def report_out(request: pytest.FixtureRequest) -> Path | None:
+    """The session's report folder when the session runs the report's test (its runs'
+    figures, drawn by the same functions), else None (a test then makes its own)."""
+    if _runs_the_report(request.session):
+        out: Path = request.getfixturevalue("reproduced").out
+        return out
+    return None
 
 
 @pytest.fixture(scope="session")

@@ -8,6 +8,7 @@ import json
 import re
 import shlex
 import subprocess
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,8 @@ from firefleet import builtin_names, load_scenario
 from firefleet.cli import main
 from firefleet.cli._console import claims_table, progress_bar
 from firefleet.cli._main import _parser
-from firefleet.cli._run import report_footer
+from firefleet.cli._run import _jobs, report_footer
+from firefleet.errors import InputError
 from firefleet.outputs import MANIFEST
 from firefleet.report.html import render_index
 from firefleet.sim.registry import task_kind
@@ -208,10 +210,44 @@ def test_reproduce_writes_report(reproduced: Reproduced) -> None:
     assert index.count('src="path-straight/controller.png"') == 1  # shown once
     assert "controller.png" not in index.split('id="path-curved-on"')[1].split("<img")[0]
     assert "issue" not in index.lower()
-    assert f"Made by: firefleet reproduce --out {out} --data {no_data}." in index
+    made_by = f"firefleet reproduce --out {out} --data {no_data} --workers {reproduced.workers}"
+    assert f"Made by: {made_by}." in index
     assert "Seeds: " in index
     assert "FAILED" not in index
     assert str((out / "index.html").resolve()) in reproduced.stdout
+
+
+def _job(err: Console, k: int) -> int:
+    """A report job for ``_jobs``: k squared; job 2 warns, job 3 fails."""
+    if k == 2:
+        warnings.warn("job 2 warns", UserWarning, stacklevel=1)
+    if k == 3:
+        raise InputError("job 3 fails")
+    return k * k
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_report_jobs_give_their_values_warnings_and_errors_here(workers: int) -> None:
+    # the session's report runs in worker processes (tests/conftest.py): a warning there
+    # is warned here, under pytest's filters (an error), as in one process
+    with _jobs(workers, Console(stderr=True)) as jobs:
+        values = [jobs(_job, k) for k in range(4)]
+        assert values[1]() == 1
+        assert values[0]() == 0
+        with pytest.warns(UserWarning, match="job 2 warns"):
+            assert values[2]() == 4
+        with pytest.raises(InputError, match="job 3 fails"):
+            values[3]()
+
+
+def test_reproduce_with_no_workers_is_bad_input(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "r"
+    assert main(["reproduce", "--workers", "0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == ["firefleet: error: --workers must be at least 1, got 0"]
+    assert not out.exists()
 
 
 def test_run_path_following_writes_per_robot_metrics(

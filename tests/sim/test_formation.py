@@ -229,12 +229,14 @@ def test_run_writes_leader_and_claims(tmp_path: Path) -> None:
     assert all(c["passed"] for c in doc["claims"])
 
 
-def test_animation_of_a_moving_leader_is_a_gif() -> None:
-    from firefleet.report.formation import formation_figures
+def test_animation_of_a_moving_leader_is_a_gif(report_out: Path | None) -> None:
+    if report_out is not None:  # the session's report drew it (tests/conftest.py)
+        gif = (report_out / "formation-obstacles" / "formation.gif").read_bytes()
+    else:
+        from firefleet.report.formation import formation_figures
 
-    scn = _shorter(load_scenario("formation-obstacles"), 12.0)
-    figs = formation_figures(simulate(scn))
-    gif = figs["formation.gif"]
+        scn = _shorter(load_scenario("formation-obstacles"), 12.0)
+        gif = formation_figures(simulate(scn))["formation.gif"]
     assert gif[:6] == b"GIF89a"
     import io
 

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
+import functools
 import os
-from collections.abc import Mapping, Sequence
+import warnings
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from rich.console import Console
 from rich.markup import escape
@@ -74,6 +77,14 @@ def add_parsers(sub: Any) -> None:
         metavar="A:B",
         help="also run every experiment with seeds A to B-1 (on Dask, as `firefleet sweep`) "
         "and report each claim's pass rate over them",
+    )
+    reproduce.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        metavar="N",
+        help="run the experiments in N processes at once (default 1: one after another; "
+        "the report is the same)",
     )
     reproduce.set_defaults(handler=cmd_reproduce)
 
@@ -178,6 +189,8 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
     """``firefleet reproduce``."""
     from firefleet.report.html import ReportEntry, render_index
 
+    if args.workers < 1:
+        raise InputError(f"--workers must be at least 1, got {args.workers}")
     scenarios = [s for s in (load_scenario(n) for n in builtin_names()) if s.reproduces]
     scenarios.sort(key=lambda s: _figure_number(s.reproduces))
     seeds = None
@@ -185,14 +198,27 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
         from firefleet.sweep import parse_seeds
 
         seeds = parse_seeds(args.seeds)
+    data = _data_dir(args)
     dest = Path(args.out)
     entries: list[ReportEntry] = []
     record = run_record(args.command_line, seed=None)
-    with staged_dir(dest, record=record) as stage:
+    with staged_dir(dest, record=record) as stage, _jobs(args.workers, err) as jobs:
+        # the missions and the link study take minutes each: started first
+        heavy = [s.name for s in scenarios if s.command.kind == "mission"]
+        first = [s for s in scenarios if s.name in heavy]
+        runs = {
+            s.name: jobs(_scenario_job, s.name, stage / s.name, tuple(args.command_line))
+            for s in first
+        }
+        link = jobs(_link_job)
+        runs |= {
+            s.name: jobs(_scenario_job, s.name, stage / s.name, tuple(args.command_line))
+            for s in scenarios
+            if s.name not in heavy
+        }
+        section_27 = jobs(_section_27_job, data)
         for scn in scenarios:
-            document, figs = run_into(
-                scn, stage / scn.name, plots=True, err=err, command_line=args.command_line
-            )
+            document, figs = runs[scn.name]()
             entries.append(
                 ReportEntry(
                     name=scn.name,
@@ -210,8 +236,10 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
             from firefleet.cli._sweep import seed_pass_rates
 
             entries = seed_pass_rates(entries, scenarios, seeds, args.seeds, stage, out, err)
-        missing = _section_27(stage, entries, args, out, err)
-        _section_25(stage, entries, out, err)
+        runs_27, missing = section_27()
+        for run in runs_27:
+            entries.append(_write_report_run(stage, run, out))
+        entries.append(_write_report_run(stage, link(), out))
         footer = report_footer(record, {s.name: s.seed for s in scenarios})
         (stage / "dashboard.png").write_bytes(dashboard_screenshot())
         index = render_index(
@@ -227,6 +255,78 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
     out.print(f"{passed} of {total} claims passed")
     out.print(f"report: {(dest / 'index.html').resolve()}", markup=False, highlight=False)
     return EXIT_OK if passed == total else EXIT_CLAIM_FAILED
+
+
+_T = TypeVar("_T")
+
+
+@contextlib.contextmanager
+def _jobs(workers: int, err: Console) -> Iterator[Callable[..., Callable[[], Any]]]:
+    """``submit(job, *args)`` -> a function that returns ``job(err, *args)``'s value.
+
+    One worker: the job runs when its value is asked for, here, with its progress on
+    ``err``. More: jobs start at once in that many processes ("spawn": numba's OpenMP
+    layer does not survive a fork), each job's progress as plain lines on stderr; a
+    job's warnings are warned again here (under this process's filters) and its
+    exception raised here when its value is asked for.
+    """
+    if workers == 1:
+        yield lambda job, *args: functools.partial(job, err, *args)
+        return
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+
+        def submit(job: Callable[..., Any], *args: Any) -> Callable[[], Any]:
+            future = pool.submit(_in_worker, job, *args)
+
+            def value() -> Any:
+                result, caught = future.result()
+                for message, category, filename, lineno in caught:
+                    warnings.warn_explicit(message, category, filename, lineno)
+                return result
+
+            return value
+
+        try:
+            yield submit
+        except BaseException:
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
+
+
+def _in_worker(
+    job: Callable[..., _T], *args: Any
+) -> tuple[_T, list[tuple[str, type[Warning], str, int]]]:
+    """``job(err, *args)`` in a worker process, and the warnings it gave (once each)."""
+    err = Console(stderr=True, force_terminal=False)  # two bars would garble a terminal
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = job(err, *args)
+    seen = dict.fromkeys((str(w.message), w.category, w.filename, w.lineno) for w in caught)
+    return result, list(seen)
+
+
+def _scenario_job(
+    err: Console, name: str, folder: Path, command_line: tuple[str, ...]
+) -> tuple[dict[str, Any], tuple[str, ...]]:
+    """A built-in scenario run into ``folder`` with its figures (``run_into``)."""
+    return run_into(load_scenario(name), folder, plots=True, err=err, command_line=command_line)
+
+
+def _section_27_job(err: Console, data: Path | None) -> tuple[list[Any], str]:
+    """Section 2.7's runs and what was left out (:func:`_section_27`)."""
+    return _section_27(data, err)
+
+
+def _link_job(err: Console) -> Any:
+    """Section 2.5's study (cooperation over an imperfect link) as a report run."""
+    from firefleet.report.network import link_study_run
+
+    with progress_bar(err, "section 2.5: the link study") as progress:
+        return link_study_run(progress=progress)
 
 
 def _data_dir(args: argparse.Namespace) -> Path | None:
@@ -262,19 +362,13 @@ def _thermal_frames(data: Path | None) -> dict[str, Any]:
     return frames
 
 
-def _section_27(
-    stage: Path,
-    entries: list[Any],
-    args: argparse.Namespace,
-    out: Console,
-    err: Console,
-) -> str:
-    """Section 2.7's runs (thermal, stereo, SLAM) into the report; what was left out."""
+def _section_27(data: Path | None, err: Console) -> tuple[list[Any], str]:
+    """Section 2.7's runs (thermal, stereo, SLAM) from the data folder ``data``; what was
+    left out (a sentence for the report, or "")."""
     from firefleet.report.html import ReportRun
     from firefleet.report.sensing import stereo_runs, thermal_run
     from firefleet.report.slam import slam_report_runs
 
-    data = _data_dir(args)
     frames = _thermal_frames(data)
     park = data / "slam" / "victoria_park.txt" if data is not None else None
     park = park if park is not None and park.is_file() else None
@@ -294,11 +388,9 @@ def _section_27(
         progress(3, 3)
     if park is not None and not any(r.name == "slam-victoria-park" for r in runs):
         missing.append("Victoria Park's GTSAM reference (the gtsam package is not installed)")
-    for run in runs:
-        entries.append(_write_report_run(stage, run, out))
     if not missing:
-        return ""
-    return (
+        return runs, ""
+    return runs, (
         "Not in this report, its data not found (give --data DIR or set FIREFLEET_DATA): "
         + "; ".join(missing)
         + "."
@@ -328,15 +420,6 @@ def _write_report_run(stage: Path, run: Any, out: Console) -> Any:
         links=("metrics.json",),
         captions=run.captions,
     )
-
-
-def _section_25(stage: Path, entries: list[Any], out: Console, err: Console) -> None:
-    """Section 2.5's study (cooperation over an imperfect link) into the report."""
-    from firefleet.report.network import link_study_run
-
-    with progress_bar(err, "section 2.5: the link study") as progress:
-        run = link_study_run(progress=progress)
-    entries.append(_write_report_run(stage, run, out))
 
 
 def report_footer(record: Mapping[str, Any], seeds: Mapping[str, int]) -> str:
