@@ -203,19 +203,15 @@ def cmd_reproduce(args: argparse.Namespace, out: Console, err: Console) -> int:
     entries: list[ReportEntry] = []
     record = run_record(args.command_line, seed=None)
     with staged_dir(dest, record=record) as stage, _jobs(args.workers, err) as jobs:
+
+        def submit(scn: Any) -> Callable[[], Any]:
+            return jobs(_scenario_job, scn.name, stage / scn.name, tuple(args.command_line))
+
         # the missions and the link study take minutes each: started first
-        heavy = [s.name for s in scenarios if s.command.kind == "mission"]
-        first = [s for s in scenarios if s.name in heavy]
-        runs = {
-            s.name: jobs(_scenario_job, s.name, stage / s.name, tuple(args.command_line))
-            for s in first
-        }
+        missions = [s for s in scenarios if s.command.kind == "mission"]
+        runs = {s.name: submit(s) for s in missions}
         link = jobs(_link_job)
-        runs |= {
-            s.name: jobs(_scenario_job, s.name, stage / s.name, tuple(args.command_line))
-            for s in scenarios
-            if s.name not in heavy
-        }
+        runs |= {s.name: submit(s) for s in scenarios if s.name not in runs}
         section_27 = jobs(_section_27_job, data)
         for scn in scenarios:
             document, figs = runs[scn.name]()

@@ -395,7 +395,9 @@ def update_knowledge(
         lookers = np.flatnonzero(looked)
         # a spot with flames is looked at where the detection put it; one without (the
         # hot floor and gas a fire leaves) on the face of the wall or rack it lies in
-        spots = np.where(k.spot_flame[:, None], k.spot_xy_m, seen_point(cm, k.spot_xy_m))
+        spots = k.spot_xy_m.copy()
+        gas = ~k.spot_flame
+        spots[gas] = seen_point(cm, spots[gas])
         dx = spots[None, :, 0] - pose[lookers, None, 0]
         dy = spots[None, :, 1] - pose[lookers, None, 1]
         bearing = np.arctan2(dy, dx) - pose[lookers, None, 2]
