@@ -190,6 +190,38 @@ def test_head_on_in_a_passage_only_one_fits_through() -> None:
     assert r.arrival_s[0] < r.arrival_s[1]  # robot 0 has the right of way
 
 
+def _held_pair(t_end_s: float) -> tuple[tuple[str, ...], list[int]]:
+    """Robot 0 bound east along y = 1 (its poses held: it makes no progress), robot 1
+    0.45 m beside its way, bound across it; navigation run to ``t_end_s``."""
+    occ = _walled(40, 80)
+    grid = OccupancyGrid(occ, ~occ, 0.1)
+    params = NavigationParams()
+    pose = np.array([[1.0, 1.0, 0.0], [3.0, 1.45, -np.pi / 2]])
+    state = navigation_init(grid, pose, [[6.0, 1.0], [3.0, 0.4]], params)
+    t = 0.0
+    while t <= t_end_s:
+        inputs = NavigationInputs(pose, {}, pose[:, :2], t)
+        state, _, _ = navigation_step(state, inputs, params, 0.1)
+        t += 0.1
+    return state.status, state.aside_of.tolist()
+
+
+def test_a_robot_beside_a_held_up_teammates_way_makes_way() -> None:
+    # robot 1's way crosses robot 0's; robot 1 stands 0.45 m from robot 0's way ahead,
+    # outside the 0.35 m that puts it in the way, so it waits for robot 0 to pass
+    gap = 2 * NavigationParams().robot_radius_m + NavigationParams().margin_m
+    assert gap < 0.45
+    status, aside = _held_pair(1.0)
+    assert status[1] == "waiting"
+    assert aside == [-1, -1]
+    # robot 0 held up for stuck_time_s (3 s): robot 1 makes way instead of waiting on
+    # (the house, seed 3: a fighter in a doorway waited 600 s for a teammate whose
+    # window found no way past it)
+    status, aside = _held_pair(3.5)
+    assert aside == [-1, 0]
+    assert status[1] == "moving"
+
+
 def test_an_unreachable_goal_is_reported_and_the_robot_stays() -> None:
     occ = _walled(60, 60)
     occ[10:30, 10] = occ[10:30, 30] = occ[10, 10:31] = occ[30, 10:31] = True  # a closed room

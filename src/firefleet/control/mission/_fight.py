@@ -22,11 +22,13 @@ from firefleet.control.navigation import Costmap
 from firefleet.world import OccupancyGrid
 
 __all__ = [
+    "coarse_on",
     "dry_flames",
     "fight_goals",
     "fight_through",
     "fire_costmap",
     "flame_guard",
+    "flame_reach",
     "known_clear",
     "shot_limits_m",
 ]
@@ -66,6 +68,34 @@ def _reachable(blocked: BoolArray, grid: OccupancyGrid, xy_m: FloatArray) -> Boo
         lab[lab == 0] = labels[ri[out_rc[:, 0], out_rc[:, 1]], ci[out_rc[:, 0], out_rc[:, 1]]]
     lab = lab[lab > 0]
     out: BoolArray = np.isin(labels, lab) if len(lab) else free
+    return out
+
+
+def flame_reach(state: TacticsState, xy_m: FloatArray, params: TacticsParams) -> BoolArray:
+    """Map cells (H, W) the robots at ``xy_m`` (M, 2) [m] reach without crossing the
+    cells within ``fire_block_m`` of a flame the team believes (a robot among them
+    counts from its way out, :func:`_reachable`).
+
+    Every believed flame counts, soaked ones too, until a look finds it out: a soaked
+    door is no way in while the room behind it burns (mission-office seeds 0, 1, 3, 4:
+    fighters sent through a door whose flames the ledger held soaked were damaged in it
+    at 123-349 s; the house, seed 2: an explorer sent to search the room behind such a
+    door was damaged in it at 280 s with a full tank, and its wreck shut the room's only
+    door for the rest of the run).
+    """
+    blocked = np.array(state.nav.costmap.blocked)
+    grid = state.nav.costmap.grid
+    if params.fire_block_m > 0.0:
+        k = state.knowledge
+        blocked |= _disc_mask(grid, k.spot_xy_m[k.spot_flame], params.fire_block_m)
+    return _reachable(blocked, grid, xy_m)
+
+
+def coarse_on(cm: CoarseMap, mask: BoolArray) -> BoolArray:
+    """Coarse cells (Hc, Wc) whose goal cell (the map cell a robot sent there aims at)
+    lies on the map cells of ``mask`` (H, W); cells without one: no."""
+    gc = cm.goal_cell
+    out: BoolArray = (gc[..., 0] >= 0) & mask[np.maximum(gc[..., 0], 0), np.maximum(gc[..., 1], 0)]
     return out
 
 
@@ -253,17 +283,7 @@ def fight_goals(
         if same and np.isfinite(goals[team, 0]).all():
             continue
         if reach is None:
-            # reachable without crossing the cells within fire_block_m of a spot (a
-            # robot among them counts from its way out, ``_reachable``)
-            blocked = np.array(state.nav.costmap.blocked)
-            if params.fire_block_m > 0.0:
-                # every flame the team believes, soaked ones too, until a look finds
-                # it out: a soaked door is no way in while the room behind it burns
-                # (mission-office seeds 0, 1, 3, 4: fighters sent through a door whose
-                # flames the ledger held soaked were damaged in it at 123-349 s)
-                grid = state.nav.costmap.grid
-                blocked |= _disc_mask(grid, flames_all, params.fire_block_m)
-            reach = _reachable(blocked, state.nav.costmap.grid, pose[:, :2])
+            reach = flame_reach(state, pose[:, :2], params)
             clear = known_clear(state, pose, params)
             reach &= _fine(clear, state.coarse, reach.shape)
         # the ring about the spots aimed at (the flames; not the hot gas, which a fire
@@ -294,12 +314,7 @@ def fight_goals(
             # damaged there)
             keep_off = _near_mask(cm, flames_all, params.scout_near_m)
             if clear is not None and reach is not None:  # known clear, and reachable
-                keep_off |= ~clear
-                gc = cm.goal_cell
-                ok_cell = (gc[..., 0] >= 0) & reach[
-                    np.maximum(gc[..., 0], 0), np.maximum(gc[..., 1], 0)
-                ]
-                keep_off |= ~ok_cell
+                keep_off |= ~clear | ~coarse_on(cm, reach)
             keep_off |= _near_mask(cm, avoid, params.standoff_m)
             look = scout_goals(
                 cm,

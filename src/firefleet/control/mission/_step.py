@@ -16,11 +16,13 @@ from firefleet.control.mission._coverage import (
 )
 from firefleet.control.mission._explore import explore_views, scan_turn
 from firefleet.control.mission._fight import (
+    coarse_on,
     dry_flames,
     fight_goals,
     fight_through,
     fire_costmap,
     flame_guard,
+    flame_reach,
 )
 from firefleet.control.mission._hot import probe_estimate
 from firefleet.control.mission._keepout import heat_costmap
@@ -179,6 +181,11 @@ def _plan(
     going = np.array([s in ("moving", "waiting") for s in status]) & (state.mode == EXPLORE)
     there = np.array([s == "arrived" for s in status]) & (state.mode == EXPLORE)
     hot = _near_fire(cm, k.spot_xy_m, params.explore_fire_m)
+    if free.any() and k.spot_flame.any():
+        # no viewpoint the explorers reach only through a believed flame, soaked or not
+        # (``flame_reach``: the house, seed 2, an explorer sent through a door whose
+        # flames the ledger held soaked, the room behind it burning, was damaged there)
+        hot |= ~coarse_on(cm, flame_reach(state, pose[free, :2], params))
     standing = np.array([s == "arrived" for s in status]) & working & (mode != EXPLORE)
     cells = explore_views(
         cm, state.covered_coarse, pose, free, state.explore_cell, going, there,

@@ -342,6 +342,12 @@ def navigation_step(
                 )
                 theirs_of[j] = theirs
             meets, in_way = _conflict(mine, theirs, me, gap)
+            if meets and not in_way and stuck[j] > 0:
+                # it is held up (no progress in stuck_time_s) and I stand by its way: I
+                # make way instead of waiting for it (the house, seed 3: a fighter in a
+                # doorway waited for a teammate leaving the room past it, 0.38 m off,
+                # whose window found no way by it, for 600 s)
+                in_way = bool(np.hypot(theirs[:, 0] - me[0], theirs[:, 1] - me[1]).min() < limit)
             if meets and in_way and aside[i] < 0:
                 rest = np.vstack([pose[j : j + 1, :2], samples[j][index[j] :: 2, :2]])
                 spot = _aside_spot(state, params, pose, mates, i, j, rest, gap)
