@@ -299,6 +299,23 @@ def test_a_flame_seen_on_a_soaked_cell_moves_behind_the_water() -> None:
     np.testing.assert_array_equal(out[1:], xy[1:])  # gas; a dry cell; the wall behind
 
 
+def test_a_flame_on_water_before_a_wall_moves_in_front_of_it() -> None:
+    """Only soaked cells and a wall behind a flame detection on a soaked cell: it goes
+    toward its camera to the first cell not soaked, within front_m (the range read
+    long: small-house seed 4); none within front_m, or the camera nearer: unchanged."""
+    _grid, cm = _open_cm()
+    wet = np.zeros(cm.shape)
+    wet[:, 21:24] = 2.0  # soaked from x = 5.25 m up to the wall at x = 6 m
+    pose = np.array([[4.0, 2.0, 0.0], [5.3, 2.0, 0.0]])
+    xy = np.array([[5.6, 2.0], [5.6, 2.0], [5.6, 2.0]])
+    robot = np.array([0, 0, 1])
+    out = behind_water(wet, cm, pose, xy, robot, np.ones(3, bool), 1.3)
+    assert out[0].tolist() == [5.6 - 3 * 0.125, 2.0]  # the first dry cell: x 5.0-5.25 m
+    short = behind_water(wet, cm, pose, xy, robot, np.ones(3, bool), 1.3, front_m=0.25)
+    assert short[0].tolist() == [5.6, 2.0]  # 0.25 m reaches no dry cell
+    assert out[2].tolist() == [5.6, 2.0]  # its camera 0.3 m off: a step short of it only
+
+
 def test_fighters_wet_the_front_and_the_fuel_beyond_it_not_the_same_cells() -> None:
     """A fire that never goes out (the harness's point), 40 s of one fighter: with the
     ledger it aims at the dry cells within front_m of the flames, so its water soaks

@@ -246,14 +246,19 @@ def behind_water(
     *,
     step_m: float = 0.125,
     max_m: float = 1.5,
+    front_m: float = 0.5,
 ) -> FloatArray:
     """Flame detections that fell on soaked cells, moved along their camera's ray to the
-    first open cell not soaked (within ``max_m``; a wall or none: unchanged).
+    first open cell not soaked (within ``max_m``), or, with none behind it before a wall,
+    to the nearest such cell in front of it (within ``front_m``); none: unchanged.
 
     A soaked cell no longer burns (:mod:`._water`): flames seen there are behind it, as
     the detector's range reads short over a fire's near edge (mission-office, seed 1:
     a median 0.44 m short of the first burning cell on the ray, a quarter more than
-    2 m short).
+    2 m short), or, with only soaked cells and a wall behind, in front of it: the range
+    read long (small-house, seed 4: three cells along a cabinet burned from 500 s to
+    the end, 0-0.1 L/m^2 on them, their flames seen 0.2 m beyond them on cells the team
+    had soaked, so no fighter aimed at them).
 
     Parameters
     ----------
@@ -281,6 +286,18 @@ def behind_water(
         if norm < 1e-9:
             continue
         walk = out[j] + np.arange(step_m, max_m + 1e-9, step_m)[:, None] * (u / norm)
+        rc = cm.cell_of(walk)
+        wall = cm.opaque[rc[:, 0], rc[:, 1]]
+        stop = int(np.argmax(wall)) if wall.any() else len(walk)
+        dry = np.flatnonzero(~soaked_at(wet_l_m2, cm, walk[:stop], soak_l_m2))
+        if len(dry):
+            out[j] = walk[int(dry[0])]
+            continue
+        # in front, short of the camera (never within a step of it)
+        back = np.arange(step_m, min(front_m, norm - step_m) + 1e-9, step_m)
+        if len(back) == 0:
+            continue
+        walk = out[j] - back[:, None] * (u / norm)
         rc = cm.cell_of(walk)
         wall = cm.opaque[rc[:, 0], rc[:, 1]]
         stop = int(np.argmax(wall)) if wall.any() else len(walk)
