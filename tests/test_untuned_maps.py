@@ -1,6 +1,6 @@
-"""The two buildings nobody tuned for (``examples/missions/small-house``, ``apartment``):
-the copied map is byte for byte the one its PROVENANCE names, the drawn one is what its
-script draws, and the missions load on them (``test_examples`` loads every
+"""The buildings nobody tuned for (``examples/missions/small-house``, ``apartment``,
+``school``): the copied map is byte for byte the one its PROVENANCE names, the drawn ones
+are what their scripts draw, and the missions load on them (``test_examples`` loads every
 ``mission-*.yaml`` too)."""
 
 from __future__ import annotations
@@ -48,14 +48,27 @@ def test_the_apartment_map_is_what_its_script_draws() -> None:
     assert (shipped.occupied == draw["apartment"]()).all()
 
 
+def test_the_school_map_is_what_its_script_draws() -> None:
+    draw = runpy.run_path(str(MISSIONS / "school" / "draw_school.py"))
+    shipped = load_map(MISSIONS / "school" / "school.yaml")
+    assert shipped.occupied.shape == (280, 480)
+    assert (shipped.occupied == draw["school"]()).all()
+    # 39 classroom desks of 1.2 m x 0.6 m (288 cells each) stand free of every wall
+    import scipy.ndimage as ndi
+
+    label, _ = ndi.label(shipped.occupied)
+    assert int((np.bincount(label.ravel())[1:] == 288).sum()) == 3 * 9 + 2 * 6
+
+
 def test_the_untuned_missions_put_fire_people_and_robots_in_one_reachable_floor() -> None:
-    """Every robot, fire and person of both missions on the free floor connected to the
+    """Every robot, fire and person of the missions on the free floor connected to the
     robots' start (4-connected free cells: no one placed in a sealed pocket)."""
     import scipy.ndimage as ndi
 
     for path in (
         MISSIONS / "small-house" / "mission-small-house.yaml",
         MISSIONS / "apartment" / "mission-apartment.yaml",
+        MISSIONS / "school" / "mission-school.yaml",
     ):
         scn = load_scenario(path)
         assert scn.world is not None

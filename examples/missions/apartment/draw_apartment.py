@@ -18,23 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
-from firefleet.world._plans import encode_pgm, map_yaml
+from firefleet.world._plans import boxes_plan, encode_pgm, map_yaml
 
-RES_M = 0.05
 W_M, H_M = 18.0, 14.0
 T_M = 0.15
 
 
-def _set(occ: np.ndarray, x0: float, y0: float, x1: float, y1: float, value: bool) -> None:
-    h = occ.shape[0]
-    c0, c1 = round(x0 / RES_M), round(x1 / RES_M)
-    r0, r1 = h - round(y1 / RES_M), h - round(y0 / RES_M)
-    occ[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = value
-
-
 def apartment() -> np.ndarray:
     """The flat's occupied cells (row 0 at the top), shape (280, 360)."""
-    occ = np.zeros((round(H_M / RES_M), round(W_M / RES_M)), dtype=bool)
     walls = [
         # the L's outline and its solid notch (x 7-18 m, y 7-14 m)
         (0, 0, W_M, T_M), (0, 0, T_M, H_M), (W_M - T_M, 0, W_M, 7.0), (0, H_M - T_M, 7.0, H_M),
@@ -50,8 +41,6 @@ def apartment() -> np.ndarray:
         (0.15, 0.15, 2.5, 0.8), (0.2, 4.0, 0.9, 6.0), (0.5, 12.0, 2.0, 13.85),
         (13.0, 5.2, 14.5, 6.2), (6.3, 12.0, 6.85, 13.5),
     ]  # fmt: skip
-    for box in walls:
-        _set(occ, *box, value=True)
     doors = [
         (4.6, 2.8, 5.5, 3.05), (8.5, 2.8, 9.4, 3.05), (14.0, 2.8, 14.9, 3.05),  # south rooms
         (7.0, 4.45, 7.9, 4.7), (15.5, 4.45, 16.4, 4.7),  # north rooms
@@ -59,9 +48,7 @@ def apartment() -> np.ndarray:
         (4.45, 9.5, 4.7, 10.4),  # the long bedroom
         (W_M - 0.2, 3.3, W_M, 4.2),  # the front door
     ]  # fmt: skip
-    for door in doors:
-        _set(occ, *door, value=False)
-    return occ
+    return boxes_plan(W_M, H_M, walls, doors)
 
 
 if __name__ == "__main__":

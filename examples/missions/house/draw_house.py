@@ -14,23 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
-from firefleet.world._plans import encode_pgm, map_yaml
+from firefleet.world._plans import boxes_plan, encode_pgm, map_yaml
 
-RES_M = 0.05
 W_M, H_M = 16.0, 12.0
 T_M = 0.15
 
 
-def _set(occ: np.ndarray, x0: float, y0: float, x1: float, y1: float, value: bool) -> None:
-    h = occ.shape[0]
-    c0, c1 = round(x0 / RES_M), round(x1 / RES_M)
-    r0, r1 = h - round(y1 / RES_M), h - round(y0 / RES_M)
-    occ[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = value
-
-
 def house() -> np.ndarray:
     """The bungalow's occupied cells (row 0 at the top), shape (240, 320)."""
-    occ = np.zeros((round(H_M / RES_M), round(W_M / RES_M)), dtype=bool)
     walls = [
         (0, 0, W_M, T_M), (0, H_M - T_M, W_M, H_M), (0, 0, T_M, H_M), (W_M - T_M, 0, W_M, H_M),
         (6.0, 0, 6.0 + T_M, 12), (7.4, 0, 7.4 + T_M, 12), (0, 6.0, 6.0, 6.0 + T_M),
@@ -38,16 +29,12 @@ def house() -> np.ndarray:
         (6.0, 10.0, 7.4, 10.0 + T_M),
         (1.0, 1.0, 3.0, 1.8), (2.5, 8.5, 4.0, 9.5), (13.5, 0.5, 15.5, 2.5), (13.5, 4.5, 15.5, 6.5),
     ]  # fmt: skip
-    for box in walls:
-        _set(occ, *box, value=True)
     doors = [
         (5.99, 2.0, 6.16, 2.9), (5.99, 8.0, 6.16, 8.9), (7.39, 1.0, 7.56, 1.9),
         (7.39, 5.5, 7.56, 6.4), (7.39, 8.8, 7.56, 9.7), (11.99, 9.0, 12.16, 9.9),
         (2.0, 5.99, 2.9, 6.16), (6.2, 9.99, 7.2, 10.16), (6.2, 0.0, 7.2, T_M),
     ]  # fmt: skip
-    for door in doors:
-        _set(occ, *door, value=False)
-    return occ
+    return boxes_plan(W_M, H_M, walls, doors)
 
 
 if __name__ == "__main__":

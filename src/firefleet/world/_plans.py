@@ -13,12 +13,23 @@ ROS ``map_server`` map format: http://wiki.ros.org/map_server#Map_format
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from firefleet._typing import BoolArray
 from firefleet.world._floor100 import FLOOR100_RESOLUTION_M, floor100
 
-__all__ = ["PLANS", "RESOLUTION_M", "encode_pgm", "map_yaml", "maze", "office", "warehouse"]
+__all__ = [
+    "PLANS",
+    "RESOLUTION_M",
+    "boxes_plan",
+    "encode_pgm",
+    "map_yaml",
+    "maze",
+    "office",
+    "warehouse",
+]
 
 RESOLUTION_M = 0.05
 """Cell side of every built-in plan [m]."""
@@ -162,6 +173,33 @@ PLANS = {"office": office, "warehouse": warehouse, "maze": maze, "floor100": flo
 
 _FREE_VALUE = 254
 _OCCUPIED_VALUE = 0
+
+
+def boxes_plan(
+    width_m: float,
+    height_m: float,
+    solid: Sequence[tuple[float, float, float, float]],
+    openings: Sequence[tuple[float, float, float, float]] = (),
+) -> BoolArray:
+    """A floor plan at ``RESOLUTION_M`` drawn from rectangles: the ``solid`` ones
+    (walls, furniture) occupied, then the ``openings`` (doors) free again; each
+    ``(x0, y0, x1, y1)`` [m] covers ``[x0, x1) x [y0, y1)`` (y up, row 0 at the top),
+    clipped to the floor. The drawing scripts of ``examples/missions/`` use it.
+
+    Examples
+    --------
+    >>> plan = boxes_plan(1.0, 0.5, [(0.0, 0.0, 1.0, 0.5)], [(0.4, 0.0, 0.6, 0.5)])
+    >>> plan.shape, int(plan.sum()), bool(plan[:, 8:12].any())  # a 0.2 m door
+    ((10, 20), 160, False)
+    """
+    occupied = np.zeros((_cells(height_m), _cells(width_m)), dtype=bool)
+    h = occupied.shape[0]
+    for boxes, value in ((solid, True), (openings, False)):
+        for x0, y0, x1, y1 in boxes:
+            c0, c1 = _cells(x0), _cells(x1)
+            r0, r1 = h - _cells(y1), h - _cells(y0)
+            occupied[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = value
+    return occupied
 
 
 def encode_pgm(occupied: BoolArray) -> bytes:
