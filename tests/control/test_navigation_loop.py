@@ -222,6 +222,28 @@ def test_a_robot_beside_a_held_up_teammates_way_makes_way() -> None:
     assert status[1] == "moving"
 
 
+def test_a_robot_standing_beside_a_held_up_movers_way_makes_way() -> None:
+    # a 1 m passage; robot 0 stands (its goal reached) by its wall: a way past it
+    # exists, so it is not asked to move; once robot 1 is held up for stuck_time_s
+    # (poses held) near it, it is (a school wing, seed 1: an explorer held 240 s behind
+    # a fighter standing in a classroom's 1 m door)
+    occ = np.zeros((40, 100), dtype=bool)
+    occ[:15] = occ[25:] = True
+    grid = OccupancyGrid(occ, ~occ, 0.1)
+    params = NavigationParams()
+    pose = np.array([[5.0, 1.75, 0.0], [4.0, 2.0, 0.0]])
+    state = navigation_init(grid, pose, [[5.0, 1.75], [9.0, 2.0]], params)
+    parked = []
+    for k in range(40):
+        inputs = NavigationInputs(pose, {}, pose[:, :2], 0.1 * k, np.ones(2, dtype=bool))
+        state, _, _ = navigation_step(state, inputs, params, 0.1)
+        assert state.parked is not None
+        parked.append(bool(state.parked[0]))
+    assert not any(parked[:25])  # 2.5 s: not yet held up
+    assert parked[-1]
+    assert state.aside_of.tolist() == [1, -1]
+
+
 def test_an_unreachable_goal_is_reported_and_the_robot_stays() -> None:
     occ = _walled(60, 60)
     occ[10:30, 10] = occ[10:30, 30] = occ[10, 10:31] = occ[30, 10:31] = True  # a closed room

@@ -63,3 +63,33 @@ def test_no_explorer_is_sent_through_a_door_the_team_believes_burning() -> None:
     clear = _plan(replace(state, knowledge=out, covered_coarse=covered), pose, tank, working, p)
     assert (clear.mode == EXPLORE).sum() == 2
     assert np.all(clear.goal_xy_m[:, 0] > 6.0)
+
+
+def test_a_refiller_stops_short_of_a_burning_door_on_its_way() -> None:
+    """A fighter empties its small tank on a fire in the only door between it and the
+    refill point: as a refiller it is held by the flame guard short of the flames (it
+    drove through them before: a school wing, seed 1, damaged at 423 s), and with its
+    tank empty it does not spray its way on."""
+    from tests.control.mission._harness import World
+
+    p = TacticsParams(
+        nav=FAST_NAV,
+        soak_l_m2=1e9,
+        fire_robots_min=1,
+        fire_robots_max=1,
+        explore_frac=0.0,
+        sensing_range_m=6.0,
+        tank_l=1.0,
+        flow_l_s=0.5,
+        refill_xy_m=(2.0, 5.0),
+    )
+    world = World(two_rooms(), p, np.array([[8.5, 5.0, np.pi]]), fire_xy=np.array([[6.0, 5.0]]),
+                  water_l=1e9)  # fmt: skip
+    world.run(60.0)
+    mode = np.array([e["mode"][0] for e in world.log])
+    pose = np.array([e["pose"][0] for e in world.log])
+    refill = mode == MODES.index("refill")
+    assert refill.any(), "it never went to refill"
+    d = np.hypot(pose[refill, 0] - 6.0, pose[refill, 1] - 5.0)
+    assert d.min() > 0.5 * p.flame_guard_m
+    assert np.all(pose[:, 0] > 6.0)  # it never passed the door
