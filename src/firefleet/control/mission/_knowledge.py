@@ -280,30 +280,30 @@ def behind_water(
     """
     out = np.array(fire_xy, dtype=float, copy=True)
     todo = np.flatnonzero(flames & soaked_at(wet_l_m2, cm, out, soak_l_m2))
+
+    def first_dry(walk: FloatArray) -> int:
+        """Index of the first point of ``walk`` on a dry cell before a wall (-1: none)."""
+        rc = cm.cell_of(walk)
+        wall = cm.opaque[rc[:, 0], rc[:, 1]]
+        stop = int(np.argmax(wall)) if wall.any() else len(walk)
+        dry = np.flatnonzero(~soaked_at(wet_l_m2, cm, walk[:stop], soak_l_m2))
+        return int(dry[0]) if len(dry) else -1
+
     for j in map(int, todo):
         u = out[j] - pose[int(fire_robot[j]), :2]
         norm = math.hypot(float(u[0]), float(u[1]))
         if norm < 1e-9:
             continue
-        walk = out[j] + np.arange(step_m, max_m + 1e-9, step_m)[:, None] * (u / norm)
-        rc = cm.cell_of(walk)
-        wall = cm.opaque[rc[:, 0], rc[:, 1]]
-        stop = int(np.argmax(wall)) if wall.any() else len(walk)
-        dry = np.flatnonzero(~soaked_at(wet_l_m2, cm, walk[:stop], soak_l_m2))
-        if len(dry):
-            out[j] = walk[int(dry[0])]
-            continue
-        # in front, short of the camera (never within a step of it)
-        back = np.arange(step_m, min(front_m, norm - step_m) + 1e-9, step_m)
-        if len(back) == 0:
-            continue
-        walk = out[j] - back[:, None] * (u / norm)
-        rc = cm.cell_of(walk)
-        wall = cm.opaque[rc[:, 0], rc[:, 1]]
-        stop = int(np.argmax(wall)) if wall.any() else len(walk)
-        dry = np.flatnonzero(~soaked_at(wet_l_m2, cm, walk[:stop], soak_l_m2))
-        if len(dry):
-            out[j] = walk[int(dry[0])]
+        # behind it, then in front of it short of the camera (never within a step of it)
+        for steps in (
+            np.arange(step_m, max_m + 1e-9, step_m),
+            -np.arange(step_m, min(front_m, norm - step_m) + 1e-9, step_m),
+        ):
+            walk = out[j] + steps[:, None] * (u / norm)
+            k = first_dry(walk) if len(walk) else -1
+            if k >= 0:
+                out[j] = walk[k]
+                break
     return out
 
 

@@ -376,12 +376,12 @@ def _orders(
     if params.flame_guard_m > 0.0 and len(flames):
         # every robot stops short of flames, a refiller too (one exempt, its tank at
         # 2.6 L, drove from its slot onto a burning cell between a classroom's desks and
-        # was damaged: a school wing, seed 1); one held with water sprays its way on,
-        # a refiller too (exempt before: on mission-office seed 1 two were held in the
-        # fire's room by the flames at its door)
+        # was damaged: a school wing, seed 1)
         before = v.copy()
         v, w = flame_guard(v, w, pose, flames, params.flame_guard_m, math.radians(60.0), w_max)
-        # one held with water sprays its way on (``fight_through``)
+        # one held with water sprays its way on (``fight_through``), a refiller too
+        # (exempt before: on mission-office seed 1 two were held in the fire's room by
+        # the flames at its door)
         held = (mode == FIGHT) | (mode == REFILL)
         held &= (before > 0.0) & (v == 0.0) & (obs.tank_l > 0.0) & ~spray
         wet = state.knowledge.wet_l_m2

@@ -432,6 +432,21 @@ _CAPTURE_M = 0.05
 """A robot has caught its path once it comes this close to it [m]."""
 
 
+def _peaks(series: FloatArray) -> list[float]:
+    """Largest |value| of each robot's column (T, N), over the ticks that hold one: a
+    robot's series is NaN until the plant hears its first command (``firefleet team``
+    in real time, a robot process late for its first ticks); NaN for a column of none.
+
+    Examples
+    --------
+    >>> _peaks(np.array([[np.nan, np.nan], [0.5, np.nan], [-2.0, np.nan]]))
+    [2.0, nan]
+    """
+    a = np.abs(np.asarray(series, dtype=float))
+    peak = np.where(np.isnan(a), -np.inf, a).max(axis=0)
+    return [float(v) if v > -np.inf else math.nan for v in peak]
+
+
 def path_following_metrics(result: SimResult) -> Metrics:
     """Metrics of a path-following run, on the true poses (per robot: a list).
 
@@ -500,8 +515,8 @@ def path_following_metrics(result: SimResult) -> Metrics:
     longest = int(np.argmax(lengths))
     others = [s for i, s in enumerate(speed) if i != longest]
     out["longest_path_speed_margin_m_s"] = speed[longest] - max(others) if others else math.nan
-    omega_peak = [float(v) for v in np.abs(result.extra["omega_ref_rad_s"]).max(axis=0)]
-    y_peak = [float(v) for v in np.abs(result.extra["y_err_m"]).max(axis=0)]
+    omega_peak = _peaks(result.extra["omega_ref_rad_s"])
+    y_peak = _peaks(result.extra["y_err_m"])
     out["omega_peak_rad_s"] = omega_peak
     out["y_err_peak_m"] = y_peak
     other_omega = [w for i, w in enumerate(omega_peak) if i != longest]
