@@ -42,12 +42,20 @@ def _cells(metres: float) -> int:
     return round(metres / RESOLUTION_M)
 
 
-def _box(occupied: BoolArray, x0_m: float, y0_m: float, x1_m: float, y1_m: float) -> None:
-    """Mark the rectangle ``[x0, x1) x [y0, y1)`` [m] occupied (y up, row 0 at the top)."""
+def _fill(
+    occupied: BoolArray, x0_m: float, y0_m: float, x1_m: float, y1_m: float, value: bool
+) -> None:
+    """Set the rectangle ``[x0, x1) x [y0, y1)`` [m] to ``value`` (y up, row 0 at the
+    top), clipped to the grid."""
     h = occupied.shape[0]
     c0, c1 = _cells(x0_m), _cells(x1_m)
     r0, r1 = h - _cells(y1_m), h - _cells(y0_m)
-    occupied[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = True
+    occupied[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = value
+
+
+def _box(occupied: BoolArray, x0_m: float, y0_m: float, x1_m: float, y1_m: float) -> None:
+    """Mark the rectangle ``[x0, x1) x [y0, y1)`` [m] occupied (y up, row 0 at the top)."""
+    _fill(occupied, x0_m, y0_m, x1_m, y1_m, True)
 
 
 def _clear(occupied: BoolArray, x0_m: float, y0_m: float, x1_m: float, y1_m: float) -> None:
@@ -193,12 +201,9 @@ def boxes_plan(
     ((10, 20), 160, False)
     """
     occupied = np.zeros((_cells(height_m), _cells(width_m)), dtype=bool)
-    h = occupied.shape[0]
     for boxes, value in ((solid, True), (openings, False)):
-        for x0, y0, x1, y1 in boxes:
-            c0, c1 = _cells(x0), _cells(x1)
-            r0, r1 = h - _cells(y1), h - _cells(y0)
-            occupied[max(r0, 0) : max(r1, 0), max(c0, 0) : max(c1, 0)] = value
+        for box in boxes:
+            _fill(occupied, *box, value)
     return occupied
 
 
