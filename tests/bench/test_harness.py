@@ -186,3 +186,21 @@ def test_text_floors_in_other_words_keep_their_verdict() -> None:
         (0.0, ">=", 1.0, "pass", False),
     ]
     assert floors[1].name == "odd (as good: yes)"
+
+
+def test_mission_bench_scenarios_load() -> None:
+    """The mission topic's scenario files exist and load (mission-office moved into
+    scenarios/builtin while the bench still looked for mission-large beside it)."""
+    import importlib.util
+
+    from firefleet import load_scenario
+
+    spec = importlib.util.spec_from_file_location(
+        "_bench_mission", Path(__file__).resolve().parents[2] / "bench" / "mission.py"
+    )
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    names = [load_scenario(p).name for p in (module.OFFICE, module.LARGE)]
+    assert names == ["mission-office", "mission-large"]
