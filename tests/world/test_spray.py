@@ -143,3 +143,50 @@ def test_coarsen_keeps_thin_walls_and_the_origin() -> None:
     assert coarse.center_of(np.array([[1, 0]])).tolist() == [[1.125, 2.125]]
     with pytest.raises(InputError, match="factor"):
         coarsen(fine, 0)
+
+
+def _brute_cone_litres(
+    grid: OccupancyGrid, pose: np.ndarray, params: SprayParams, dt_s: float
+) -> np.ndarray:
+    """Water [L/m^2] one nozzle puts on each cell in a step, from the model over every
+    open cell of the grid (the cone, the range, the line of sight; flow shared evenly)."""
+    from firefleet.world._spray import _in_sight
+
+    rc = np.argwhere(~grid.occupied)
+    xy = grid.center_of(rc)
+    d = xy - pose[:2]
+    dist = np.hypot(d[:, 0], d[:, 1])
+    off = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - pose[2])))
+    idx = np.flatnonzero(
+        (dist <= params.range_m) & (np.abs(off) <= params.half_angle_rad) & (dist > 0)
+    )
+    idx = idx[_in_sight(grid, pose[:2], xy[idx])]
+    out = np.zeros(grid.shape)
+    if idx.size:
+        out[rc[idx, 0], rc[idx, 1]] = params.flow_l_s * dt_s / idx.size / grid.resolution_m**2
+    return out
+
+
+def test_spray_near_the_grid_edges_wets_the_cells_of_the_whole_grid_model() -> None:
+    """The step looks only at the box around a nozzle that holds its range: nozzles at
+    random poses on a walled grid, by its edges and corners and off it, wet exactly the
+    cells the model over every cell of the grid wets."""
+    rng = np.random.default_rng(11)
+    walls = rng.random((24, 36)) < 0.08
+    grid = OccupancyGrid(walls, ~walls, resolution_m=RES)
+    w_m, h_m = 36 * RES, 24 * RES
+    params = SprayParams(range_m=2.0, half_angle_rad=math.radians(30.0))
+    fire = fire_init(np.zeros(grid.shape), np.zeros(grid.shape, dtype=bool), FireParams())
+    temp = np.full(grid.shape, 20.0)
+    xs = np.concatenate([rng.uniform(-1.0, w_m + 1.0, 40), [0.1, w_m - 0.1, 0.1, w_m - 0.1]])
+    ys = np.concatenate([rng.uniform(-1.0, h_m + 1.0, 40), [0.1, 0.1, h_m - 0.1, h_m - 0.1]])
+    wetted = 0
+    for x, y in zip(xs, ys, strict=True):
+        pose = np.array([x, y, rng.uniform(-math.pi, math.pi)])
+        _, _, wet, _ = spray_step(
+            fire, temp, np.zeros(grid.shape), pose[None], [True], grid, params, 0.1
+        )
+        want = _brute_cone_litres(grid, pose, params, 0.1)
+        assert np.array_equal(wet, want)
+        wetted += int(want.any())
+    assert wetted >= 20

@@ -167,9 +167,16 @@ def spray_step(
         raise InputError(f"spray: on {spraying.shape} must be one flag per nozzle")
     used = np.zeros(pose.shape[0])
     area = grid.resolution_m**2
-    open_rc = np.argwhere(~grid.occupied)
-    centres = grid.center_of(open_rc)
+    h, w = shape
+    reach = params.range_m * np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
     for i in np.flatnonzero(spraying):
+        # the open cells of the box around the nozzle that holds its range (a cell
+        # beyond is out of range anyway): row-major, as over the whole grid
+        box = grid.cell_of(pose[i, :2] + reach)
+        r0, c0 = np.clip(box.min(axis=0) - 1, 0, None)
+        r1, c1 = np.minimum(box.max(axis=0) + 2, (h, w))
+        open_rc = np.argwhere(~grid.occupied[r0:r1, c0:c1]) + np.array([r0, c0])
+        centres = grid.center_of(open_rc)
         d = centres - pose[i, :2]
         dist = np.hypot(d[:, 0], d[:, 1])
         off = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - pose[i, 2])))

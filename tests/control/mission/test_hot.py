@@ -297,3 +297,30 @@ def test_retreat_point_is_nan_when_no_clear_cell_is_in_reach() -> None:
     walls = np.ones((6, 6), dtype=bool)
     cm0 = coarse_map(build_costmap(OccupancyGrid(walls, ~walls, resolution_m=CELL_M), 0.1), CELL_M)
     assert np.isnan(retreat_point(cm0, np.array([0.5, 0.5]), np.zeros((0, 2)), 1.0)).all()
+
+
+def test_retreat_point_with_a_small_reach_cache_agrees_with_brute_force(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The reach of each start cell is kept in the map's cache (at most ``_REACH_KEPT``
+    cells); with room for three, 40 random starts (most evicted, some asked again) still
+    give the brute force's travel, and the cache never holds more than three."""
+    import firefleet.control.mission._hot as hot
+
+    monkeypatch.setattr(hot, "_REACH_KEPT", 3)
+    occ = _plan()
+    cm = _cm(occ)
+    h = occ.shape[0]
+    free_rc = np.argwhere(~occ)
+    rng = np.random.default_rng(7)
+    away = np.array([[1.0, 1.5], [4.5, 2.0]])
+    picks = free_rc[rng.integers(len(free_rc), size=20)]
+    for r0, c0 in np.concatenate([picks, picks[::-1]]):
+        start = np.array(_centre(int(r0), int(c0), h))
+        best, dist = _brute_retreat(occ, (int(r0), int(c0)), away, 1.0, 8.0)
+        p = retreat_point(cm, start, away, 1.0)
+        rc = cm.cell_of(p[None])[0]
+        assert dist[rc[0], rc[1]] == pytest.approx(best, abs=1e-9)
+        kept = cm.cache[("reach", 8.0)]
+        assert isinstance(kept, dict)
+        assert len(kept) <= 3

@@ -176,18 +176,41 @@ def retreat_point(
     >>> bool(np.hypot(*(p - [5.0, 2.5])) < 1.8), bool(np.hypot(*(hot - p).T).min() >= 1.5)
     (True, True)
     """
-    node = cm.node_of(np.asarray(xy_m, dtype=float).reshape(1, 2))
-    travel = cm.distances(node, limit_m)[0].reshape(cm.shape)
-    cells = np.argwhere(np.isfinite(travel) & cm.standable)
-    if len(cells) == 0:
+    node = int(cm.node_of(np.asarray(xy_m, dtype=float).reshape(1, 2))[0])
+    xy, travel = _reach(cm, node, limit_m)
+    if len(xy) == 0:
         return np.full(2, np.nan)
-    xy = cm.goal_xy(cells)
     away = np.asarray(away_xy_m, dtype=float).reshape(-1, 2)
     if len(away):
         d = np.hypot(xy[:, None, 0] - away[None, :, 0], xy[:, None, 1] - away[None, :, 1])
         ok = d.min(axis=1) >= clear_m
-        cells, xy = cells[ok], xy[ok]
-    if len(cells) == 0:
+        xy, travel = xy[ok], travel[ok]
+    if len(xy) == 0:
         return np.full(2, np.nan)
-    out: FloatArray = xy[int(np.argmin(travel[cells[:, 0], cells[:, 1]]))]
+    out: FloatArray = xy[int(np.argmin(travel))]
+    return out
+
+
+_REACH_KEPT = 256
+"""Most nodes whose reach :func:`_reach` keeps in a map's cache."""
+
+
+def _reach(cm: CoarseMap, node: int, limit_m: float) -> tuple[FloatArray, FloatArray]:
+    """The goal points [m] (M, 2) of the standable cells within ``limit_m`` of travel
+    from ``node``, in row-major order, and their travel [m] (M,).
+
+    Kept in ``cm.cache`` (the oldest node dropped past ``_REACH_KEPT``): a robot in hot
+    air asks for a retreat from the same cell at every tick it stays hot (on
+    mission-large a quarter of the run went to these searches)."""
+    kept = cm.cache.setdefault(("reach", float(limit_m)), {})
+    assert isinstance(kept, dict)
+    if node in kept:
+        got: tuple[FloatArray, FloatArray] = kept[node]
+        return got
+    travel = cm.distances(np.array([node]), limit_m)[0].reshape(cm.shape)
+    cells = np.argwhere(np.isfinite(travel) & cm.standable)
+    out = (cm.goal_xy(cells), travel[cells[:, 0], cells[:, 1]])
+    if len(kept) >= _REACH_KEPT:
+        kept.pop(next(iter(kept)))
+    kept[node] = out
     return out

@@ -179,6 +179,11 @@ def _fix(
         # off the ring: the nearest cell with a shot, clear of the other slots
         cells = np.argwhere(cm.standable)
         xy = cm.goal_xy(cells)
+        # only cells within shot_m of a spot's box can have a shot (the same cells, fewer
+        # distances: on floor100 the whole map is ~100,000 cells)
+        if len(spots):
+            lo_xy, hi_xy = spots.min(axis=0) - shot_m, spots.max(axis=0) + shot_m
+            xy = xy[np.all((xy >= lo_xy) & (xy <= hi_xy), axis=1)]
         ds = np.hypot(xy[:, None, 0] - spots[None, :, 0], xy[:, None, 1] - spots[None, :, 1])
         xy = xy[np.any((ds >= near_m) & (ds <= shot_m), axis=1)]
         xy = xy[valid(xy)]
