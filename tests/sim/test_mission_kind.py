@@ -83,6 +83,21 @@ def test_the_issue_yaml_validates_as_printed(tmp_path: Path) -> None:
             "command.refill_m: (4, 2) is inside a wall of map 'office'",
         ),
         (
+            "robots: true",
+            "robots: true\n  refill_m: [[1.0, 1.0], [4.0, 2.0]]",
+            "command.refill_m[1]: (4, 2) is inside a wall of map 'office'",
+        ),
+        (
+            "robots: true",
+            "robots: true\n  refill_m: []",
+            "command.refill_m: give a point [x_m, y_m] or a list of them, got []",
+        ),
+        (
+            "robots: true",
+            "robots: true\n  refill_m: [[1.0, 1.0, 0.0]]",
+            "command.refill_m[0]: Tuple should have at most 2 items",
+        ),
+        (
             "sensors: {thermal: {}, ultrasonic: {count: 8}}",
             "sensors: {thermal: {}, ultrasonic: {count: 8}, pt100: {time_constant_s: 0}}",
             "sensors.pt100.time_constant_s: expected > 0, got 0.0",

@@ -18,7 +18,7 @@ thermal camera in ``sensors:``, and the ``mission`` command.
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import pydantic
 
@@ -144,6 +144,24 @@ class Pt100Spec:
         )
 
 
+def _one_or_more(value: object) -> object:
+    """``[x, y]`` as ``((x, y),)`` and a list of points as a tuple of tuples (the strict
+    schema's form): ``refill_m`` takes one point or a list of them.
+
+    Examples
+    --------
+    >>> _one_or_more([1.0, 2]), _one_or_more([[1.0, 2.0], [3.0, 4.0]])
+    (((1.0, 2),), ((1.0, 2.0), (3.0, 4.0)))
+    """
+    if not isinstance(value, list | tuple):
+        return value
+    if len(value) == 0:
+        raise ValueError("give a point [x_m, y_m] or a list of them, got []")
+    if all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        return (tuple(value),)
+    return tuple(tuple(p) if isinstance(p, list | tuple) else p for p in value)
+
+
 @pydantic.dataclasses.dataclass(frozen=True, config=_STRICT)
 class Mission:
     """The firefighting mission: explore, find fires and people, put the fires out.
@@ -180,11 +198,12 @@ class Mission:
     arrive_s : float
         When the team enters [s]: until then the robots wait at their poses while the
         fire burns (a fire brigade arrives minutes after the ignition).
-    refill_m : (x_m, y_m) or None
+    refill_m : (x_m, y_m), list of (x_m, y_m), or None
         Where tanks are refilled [m]: a standpipe's hose valve or a fire hose cabinet
         on the floor (building codes place them so that a hose reaches every point of
-        the storey: NFPA 14, EN 671). ``None``: the centroid of the start poses (the
-        brigade's water at the entrance). Off the map or in a wall: refused.
+        the storey: NFPA 14, EN 671), or several of them (an empty tank goes to the one
+        nearest by travel). ``None``: the centroid of the start poses (the brigade's
+        water at the entrance). Off the map or in a wall: refused.
 
     Examples
     --------
@@ -206,7 +225,9 @@ class Mission:
     perception: Literal["thermal", "stereo"] = "thermal"
     stereo_team: bool = False
     arrive_s: float = 0.0
-    refill_m: tuple[float, float] | None = None
+    refill_m: Annotated[
+        tuple[tuple[float, float], ...] | None, pydantic.BeforeValidator(_one_or_more)
+    ] = None
 
     def __post_init__(self) -> None:
         check_fields(
@@ -224,6 +245,18 @@ class Mission:
             ),
             non_negative=("arrive_s",),
         )
+        if self.refill_m is not None:
+            try:
+                points = _one_or_more(self.refill_m)
+            except ValueError as exc:
+                raise InputError(f"command.refill_m: {exc}") from None
+            refill = tuple((float(x), float(y)) for x, y in points)  # type: ignore[attr-defined]
+            object.__setattr__(self, "refill_m", refill)
+
+    @property
+    def refill_points_m(self) -> tuple[tuple[float, float], ...]:
+        """The refill points [m] (empty: the start poses' centroid)."""
+        return self.refill_m or ()
 
     def check_team(self, n_robots: int, duration_s: float) -> None:
         """The record and world steps must fit the duration."""

@@ -286,10 +286,12 @@ def check_world(
         if why is not None:
             raise InputError(f"poses[{i}]: ({pose[0]:g}, {pose[1]:g}) {why} of map {world.map!r}")
     if mission is not None and mission.refill_m is not None:
-        why = _where_blocked(grid, mission.refill_m)
-        if why is not None:
-            x, y = mission.refill_m
-            raise InputError(f"command.refill_m: ({x:g}, {y:g}) {why} of map {world.map!r}")
+        points = mission.refill_points_m
+        for k, (x, y) in enumerate(points):
+            why = _where_blocked(grid, (x, y))
+            if why is not None:
+                where = "command.refill_m" + (f"[{k}]" if len(points) > 1 else "")
+                raise InputError(f"{where}: ({x:g}, {y:g}) {why} of map {world.map!r}")
     if navigate is None:
         return
     for i, goal in enumerate(navigate.goals_m):

@@ -84,3 +84,33 @@ def test_with_no_clear_place_in_reach_the_refiller_stays_where_it_is() -> None:
     spots = np.array([[1.125, 1.125]])
     here = np.array([[1.6, 0.9]])
     assert refill_goals(cm, spots, away, 1.0, here).tolist() == here.tolist()
+
+
+def test_an_empty_tank_goes_to_the_refill_point_nearest_by_travel() -> None:
+    """Two refill points on a 10 m x 3 m floor cut by a wall at x = 5 m with a door at
+    its north end (y 2.4-3 m): point A at (1, 0.5), point B at (6.5, 0.5). A robot at
+    (4.6, 0.5), west of the wall, is 1.9 m from B in a straight line and 3.6 m from A,
+    but B is over 5 m away through the door: it goes to A. A robot at (5.4, 0.5), east
+    of the wall, goes to B (the nearer both ways). Each goal is one of its point's
+    spots (within ``refill_radius_m``)."""
+    from firefleet.control.mission import TacticsParams, tactics_init
+    from firefleet.control.mission._upkeep import tank_changes
+
+    res = 0.1
+    occ = np.zeros((30, 100), dtype=bool)
+    occ[[0, -1], :] = True
+    occ[:, [0, -1]] = True
+    occ[6:, 50] = True  # rows from the top: the wall from y = 0 to y = 2.4 m
+    grid = OccupancyGrid(occ, ~occ, resolution_m=res)
+    points = ((1.0, 0.5), (6.5, 0.5))
+    params = TacticsParams(refill_xy_m=points)
+    poses = np.array([[4.6, 0.5, 0.0], [5.4, 0.5, 0.0]])
+    state = tactics_init(grid, poses, params)
+    assert sorted(set(state.refill_group.tolist())) == [0, 1]
+    state = tank_changes(state, poses, np.zeros(2), np.ones(2, dtype=bool), params)
+    want = np.array(points)
+    for i, k in enumerate((0, 1)):
+        spot = int(state.refill_spot[i])
+        assert state.refill_group[spot] == k
+        goal = state.goal_xy_m[i]
+        assert math.hypot(*(goal - want[k])) <= params.refill_radius_m

@@ -14,7 +14,7 @@ from firefleet.control.navigation import NavigationParams
 from firefleet.errors import InputError, check_fields
 from firefleet.world import SprayParams
 
-__all__ = ["MODES", "Orders", "TacticsObservation", "TacticsParams"]
+__all__ = ["MODES", "Orders", "TacticsObservation", "TacticsParams", "refill_points"]
 
 MODES = ("explore", "confirm", "fight", "refill", "idle", "damaged")
 """What a robot is doing (``Orders.mode`` holds the index in this tuple)."""
@@ -42,9 +42,10 @@ class TacticsParams:
         Nozzle flow [L/s] (the kind drains the tank; the team reads ``tank_l`` back).
     refill_l_s : float
         Rate at which the kind refills a tank at the refill point [L/s].
-    refill_xy_m : tuple of float or None
-        The refill point [m]; ``None``: the centroid of the team's start poses (moved
-        to the nearest open cell).
+    refill_xy_m : (x, y), sequence of (x, y), or None
+        The refill point [m], or several (a floor's hose cabinets: an empty tank goes to
+        the one nearest by travel); ``None``: the centroid of the team's start poses
+        (moved to the nearest open cell).
     refill_radius_m : float
         A robot refills within this distance of the refill point [m].
     low_tank_frac : float
@@ -203,7 +204,7 @@ class TacticsParams:
     tank_l: float = 20.0
     flow_l_s: float = 0.5
     refill_l_s: float = 2.0
-    refill_xy_m: tuple[float, float] | None = None
+    refill_xy_m: tuple[float, float] | tuple[tuple[float, float], ...] | None = None
     refill_radius_m: float = 1.0
     low_tank_frac: float = 0.25
     low_tank_penalty_m: float = 20.0
@@ -346,10 +347,34 @@ class TacticsParams:
                 f"tactics.fire_robots_max must be >= fire_robots_min ({self.fire_robots_min}), "
                 f"got {self.fire_robots_max}"
             )
-        if self.refill_xy_m is not None and (
-            len(self.refill_xy_m) != 2 or not np.all(np.isfinite(self.refill_xy_m))
-        ):
-            raise InputError(f"tactics.refill_xy_m must be finite (x, y), got {self.refill_xy_m}")
+        if self.refill_xy_m is not None:
+            refill_points(self.refill_xy_m)
+
+    @property
+    def refill_points_m(self) -> FloatArray | None:
+        """The refill points [m], shape (P, 2) (``None``: the start poses' centroid)."""
+        return None if self.refill_xy_m is None else refill_points(self.refill_xy_m)
+
+
+def refill_points(xy_m: object) -> FloatArray:
+    """One point (x, y) or a sequence of them as an array (P, 2) [m], P >= 1, finite.
+
+    Examples
+    --------
+    >>> refill_points((1.0, 2.0)).tolist(), refill_points([(1, 2), (3, 4)]).shape
+    ([[1.0, 2.0]], (2, 2))
+    """
+    try:
+        a = np.asarray(xy_m, dtype=float)
+    except (TypeError, ValueError):
+        a = np.zeros((0, 3))
+    if a.ndim == 1 and a.shape == (2,):
+        a = a[None]
+    if a.ndim != 2 or a.shape[0] == 0 or a.shape[1] != 2 or not np.isfinite(a).all():
+        raise InputError(
+            f"tactics.refill_xy_m must be a finite (x, y) or a list of them, got {xy_m}"
+        )
+    return a
 
 
 @dataclass(frozen=True, eq=False)

@@ -47,7 +47,7 @@ class TacticsState:
     refill_spot : ndarray of int, shape (N,)
         Index in ``refill_spots_m`` of each refilling robot's spot (-1: none).
     refill_spots_m : ndarray, shape (K, 2)
-        Spots around the refill point [m].
+        Spots around the refill points [m] (each point's, nearest it first).
     refilling : ndarray of bool, shape (N,)
         Robots standing at their refill spot: the kind fills their tanks at
         ``refill_l_s`` (up to ``tank_l``) while this holds.
@@ -123,6 +123,8 @@ class TacticsState:
     fire_seen_s: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
     air_prev_c: FloatArray = field(default_factory=lambda: np.zeros(0))
     air_prev_s: float = -np.inf
+    refill_group: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    """The refill point of each spot of ``refill_spots_m`` (K,) (empty: all one point)."""
 
     @property
     def covered(self) -> BoolArray:
@@ -236,16 +238,18 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         raise InputError(f"poses[{i}] = {p[i, :2].tolist()} lies off the map {grid.name!r}")
     nav = navigation_init(grid, p, p[:, :2], params.nav)
     cm = coarse_map(nav.costmap, params.plan_cell_m)
-    if params.refill_xy_m is not None:
-        point = np.asarray(params.refill_xy_m, dtype=float)
-        if not grid.contains(point[None])[0]:
-            raise InputError(
-                f"tactics.refill_xy_m = {list(params.refill_xy_m)} lies off the map {grid.name!r}"
-            )
+    points = params.refill_points_m
+    if points is not None:
+        off_map = ~grid.contains(points)
+        if off_map.any():
+            bad = points[int(np.flatnonzero(off_map)[0])].tolist()
+            raise InputError(f"tactics.refill_xy_m: {bad} lies off the map {grid.name!r}")
     else:
-        point = p[:, :2].mean(axis=0)
+        points = p[:, :2].mean(axis=0)[None]
     gap = 2.0 * params.nav.robot_radius_m + params.nav.margin_m + 0.15
-    spots = _refill_spots(cm, point, params.refill_radius_m, gap)
+    per_point = [_refill_spots(cm, point, params.refill_radius_m, gap) for point in points]
+    spots = np.concatenate(per_point)
+    group = np.repeat(np.arange(len(points)), [len(k) for k in per_point])
     hc, wc = cm.shape
     zero_n = np.zeros(n)
     orders = Orders(
@@ -283,4 +287,5 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         memo={},
         base_costmap=nav.costmap,
         t_s=-np.inf,
+        refill_group=group,
     )

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from firefleet._typing import BoolArray, FloatArray
+from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._fight import dry_flames
 from firefleet.control.mission._hot import live_hot, mark_hot, retreat_point
 from firefleet.control.mission._params import DAMAGED, EXPLORE, FIGHT, IDLE, REFILL, TacticsParams
@@ -70,7 +70,9 @@ def tank_changes(
     for i in map(int, np.flatnonzero(empty)):
         used = np.bincount(spot[spot >= 0], minlength=len(spots))
         # the free spot nearest the point (spots come nearest first): one farther out,
-        # nearer the robot, leaves it refilling up to 2 refill_radius_m from the point
+        # nearer the robot, leaves it refilling up to 2 refill_radius_m from the point;
+        # of several points, the one nearest the robot by travel
+        used = used + _farther_points(state, pose[i, :2]) * (len(spot) + 1)
         spot[i] = int(np.lexsort((np.arange(len(spots)), used))[0])
         goals[i] = spots[spot[i]]
         mode[i] = REFILL
@@ -88,6 +90,22 @@ def tank_changes(
         pending=True,
     )
     return retarget(new, goals, pose)
+
+
+def _farther_points(state: TacticsState, xy_m: FloatArray) -> IntArray:
+    """0 for the spots of the refill point nearest ``xy_m`` (2,) by travel, 1 for the
+    others (K,); all 0 with one point. A point no travel reaches counts as farthest."""
+    group = state.refill_group
+    if len(group) == 0 or group.max() == 0:
+        return np.zeros(len(state.refill_spots_m), dtype=np.int64)
+    cm = state.coarse
+    travel = cm.distances(cm.node_of(np.asarray(xy_m, dtype=float)[None]))[0]
+    to_spot = travel[cm.node_of(state.refill_spots_m)]
+    to_point = np.full(int(group.max()) + 1, np.inf)
+    np.minimum.at(to_point, group, to_spot)
+    best = int(np.argmin(to_point))
+    out: IntArray = (group != best).astype(np.int64)
+    return out
 
 
 def refill_wait(

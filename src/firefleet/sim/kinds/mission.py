@@ -286,7 +286,7 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
         tank_l=cmd.tank_l,
         flow_l_s=cmd.flow_l_s,
         refill_l_s=REFILL_L_S,
-        refill_xy_m=cmd.refill_m,
+        refill_xy_m=cmd.refill_points_m or None,
         # a person is confirmed by a robot that sees them again from within 3 m (the
         # detector cannot call a standing person a person from much closer: the frame
         # cuts them); found when that position lies within 2 m of them (the world's test)
