@@ -96,12 +96,7 @@ def test_an_empty_tank_goes_to_the_refill_point_nearest_by_travel() -> None:
     from firefleet.control.mission import TacticsParams, tactics_init
     from firefleet.control.mission._upkeep import tank_changes
 
-    res = 0.1
-    occ = np.zeros((30, 100), dtype=bool)
-    occ[[0, -1], :] = True
-    occ[:, [0, -1]] = True
-    occ[6:, 50] = True  # rows from the top: the wall from y = 0 to y = 2.4 m
-    grid = OccupancyGrid(occ, ~occ, resolution_m=res)
+    grid = _two_rooms()
     points = ((1.0, 0.5), (6.5, 0.5))
     params = TacticsParams(refill_xy_m=points)
     poses = np.array([[4.6, 0.5, 0.0], [5.4, 0.5, 0.0]])
@@ -114,3 +109,39 @@ def test_an_empty_tank_goes_to_the_refill_point_nearest_by_travel() -> None:
         assert state.refill_group[spot] == k
         goal = state.goal_xy_m[i]
         assert math.hypot(*(goal - want[k])) <= params.refill_radius_m
+
+
+def _two_rooms() -> OccupancyGrid:
+    """10 m x 3 m at 0.1 m, outer walls, a wall at x = 5 m from y = 0 to y = 2.4 m."""
+    occ = np.zeros((30, 100), dtype=bool)
+    occ[[0, -1], :] = True
+    occ[:, [0, -1]] = True
+    occ[6:, 50] = True  # rows from the top: the wall from y = 0 to y = 2.4 m
+    return OccupancyGrid(occ, ~occ, resolution_m=0.1)
+
+
+def test_robots_fill_up_at_either_refill_point() -> None:
+    """The two-room floor, robots with empty tanks on either side of the wall (the
+    kinematic harness: tanks fill while the team says ``refilling``): within 60 s both
+    tanks are 95 % full (the team calls a tank full a little short of it), each filled
+    within ``refill_radius_m`` of its side's point (the second point's spots count as
+    at a point, not only the first point's)"""
+    from firefleet.control.mission import TacticsParams
+    from tests.control.mission._harness import World
+
+    points = np.array([[1.0, 0.5], [6.5, 0.5]])
+    params = TacticsParams(refill_xy_m=((1.0, 0.5), (6.5, 0.5)))
+    world = World(_two_rooms(), params, np.array([[3.0, 1.0, 0.0], [8.0, 1.0, np.pi]]))
+    world.tank[:] = 0.0
+    where: list[list[np.ndarray]] = [[], []]
+    for _ in range(600):
+        world.step()
+        for i in np.flatnonzero(world.state.refilling):
+            where[int(i)].append(world.pose[i, :2].copy())
+        if (world.tank >= 0.95 * params.tank_l).all():
+            break
+    assert (world.tank >= 0.95 * params.tank_l).all()
+    for i, k in enumerate((0, 1)):
+        at = np.asarray(where[i])
+        assert len(at) > 0
+        assert np.hypot(*(at - points[k]).T).max() <= params.refill_radius_m + 0.05

@@ -366,7 +366,9 @@ def _orders(
     # refill_radius_m of it, through the robot's spot and the spot nearest the point
     spots_r = state.refill_spots_m
     spot_i = np.clip(state.refill_spot, 0, len(spots_r) - 1)
-    off = np.hypot(*(spots_r[spot_i] - spots_r[0]).T)
+    group = state.refill_group
+    head = np.searchsorted(group, group[spot_i]) if len(group) else np.zeros_like(spot_i)
+    off = np.hypot(*(spots_r[spot_i] - spots_r[head]).T)  # from its point's first spot
     d_spot = np.hypot(*(pose[:, :2] - spots_r[spot_i]).T)  # not where it waits (_refill)
     refilling = (mode == REFILL) & at_goal & (d_spot + off <= params.refill_radius_m)
     stop = (mode == DAMAGED) | refilling | ((mode == IDLE) & ~aside)
