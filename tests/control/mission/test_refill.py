@@ -136,8 +136,8 @@ def test_robots_fill_up_at_either_refill_point() -> None:
     where: list[list[np.ndarray]] = [[], []]
     for _ in range(600):
         world.step()
-        for i in np.flatnonzero(world.state.refilling):
-            where[int(i)].append(world.pose[i, :2].copy())
+        for j in map(int, np.flatnonzero(world.state.refilling)):
+            where[j].append(world.pose[j, :2].copy())
         if (world.tank >= 0.95 * params.tank_l).all():
             break
     assert (world.tank >= 0.95 * params.tank_l).all()
