@@ -175,6 +175,14 @@ def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
     (:func:`fight_goals`: the room behind a soaked door may burn unseen).
     """
     k = state.knowledge
+    # the last answer is kept in the map's cache with the knowledge it was for (the
+    # team's knowledge is replaced, never changed in place): asked several times a tick,
+    # and with a few thousand flames believed (mission-large) each answer costs tens of ms
+    key = ("dry_flames", params.soak_l_m2, params.standoff_m)
+    kept = state.coarse.cache.get(key)
+    if isinstance(kept, tuple) and kept[0] is k:
+        last: FloatArray = kept[1]
+        return last
     fl = k.spot_xy_m[k.spot_flame]
     wet = soaked_at(k.wet_l_m2, state.coarse, fl, params.soak_l_m2)
     dry = fl[~wet]
@@ -182,6 +190,8 @@ def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
         d = np.hypot(fl[:, None, 0] - dry[None, :, 0], fl[:, None, 1] - dry[None, :, 1])
         wet &= d.min(axis=1) > params.standoff_m
     out: FloatArray = fl[~wet]
+    out.flags.writeable = False
+    state.coarse.cache[key] = (k, out)
     return out
 
 

@@ -181,6 +181,9 @@ def retreat_point(
     if len(xy) == 0:
         return np.full(2, np.nan)
     away = np.asarray(away_xy_m, dtype=float).reshape(-1, 2)
+    # a point farther than clear_m from the reach's box is clear of every cell in it
+    lo_xy, hi_xy = xy.min(axis=0) - clear_m, xy.max(axis=0) + clear_m
+    away = away[np.all((away >= lo_xy) & (away <= hi_xy), axis=1)]
     if len(away):
         d = np.hypot(xy[:, None, 0] - away[None, :, 0], xy[:, None, 1] - away[None, :, 1])
         ok = d.min(axis=1) >= clear_m
