@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
-from firefleet.control.mission import MODES, TacticsParams
+from firefleet.control.mission import MODES, TacticsParams, tactics_init
 from firefleet.control.mission._coverage import CoarseMap, coarse_map
-from firefleet.control.mission._knowledge import behind_water
+from firefleet.control.mission._fight import dry_flames
+from firefleet.control.mission._knowledge import behind_water, empty_knowledge
 from firefleet.control.mission._water import spray_ledger
 from firefleet.control.navigation import build_costmap
 from firefleet.world import FireParams, OccupancyGrid, SprayParams, fire_init, spray_step
@@ -342,3 +344,28 @@ def test_fighters_wet_the_front_and_the_fuel_beyond_it_not_the_same_cells() -> N
         out[soak] = (len(xy) / used, int(beyond.sum()))
     assert out[1.3][0] >= 1.5 * out[NEVER][0], out
     assert out[1.3][1] >= 10, out
+
+
+def test_dry_flames_answers_for_the_knowledge_it_is_asked_about() -> None:
+    """``dry_flames`` keeps its last answer with the knowledge it was for: three flames
+    on an open floor, all dry, then the same knowledge with the ledger soaking the one
+    3 m from the others (a soaked flame with no dry one within ``standoff_m`` is out),
+    then the first knowledge again: each answer is the brute force's for its knowledge."""
+    walls = np.zeros((40, 80), dtype=bool)
+    grid = OccupancyGrid(walls, ~walls, resolution_m=0.25)
+    params = TacticsParams()
+    state = tactics_init(grid, [[1.0, 1.0, 0.0]], params)
+    flames = np.array([[5.0, 5.0], [5.5, 5.0], [8.5, 5.0]])
+    k0 = replace(
+        empty_knowledge(),
+        spot_xy_m=flames,
+        spot_fire=np.zeros(3, dtype=np.int64),
+        spot_flame=np.ones(3, dtype=bool),
+        spot_misses=np.zeros(3, dtype=np.int64),
+    )
+    wet = np.zeros(state.coarse.shape)
+    wet[state.coarse.cell_of(flames[2:])[0, 0], state.coarse.cell_of(flames[2:])[0, 1]] = 5.0
+    k1 = replace(k0, wet_l_m2=wet)
+    assert dry_flames(replace(state, knowledge=k0), params).tolist() == flames.tolist()
+    assert dry_flames(replace(state, knowledge=k1), params).tolist() == flames[:2].tolist()
+    assert dry_flames(replace(state, knowledge=k0), params).tolist() == flames.tolist()
