@@ -13,6 +13,7 @@ from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap
 from firefleet.control.mission._hot import live_hot
 from firefleet.control.mission._knowledge import fires_of
+from firefleet.control.mission._near import any_within
 from firefleet.control.mission._params import TacticsParams
 from firefleet.control.mission._ring import has_shot, ring_slots
 from firefleet.control.mission._scout import scout_goals
@@ -187,8 +188,8 @@ def dry_flames(state: TacticsState, params: TacticsParams) -> FloatArray:
     wet = soaked_at(k.wet_l_m2, state.coarse, fl, params.soak_l_m2)
     dry = fl[~wet]
     if len(dry) and wet.any():
-        d = np.hypot(fl[:, None, 0] - dry[None, :, 0], fl[:, None, 1] - dry[None, :, 1])
-        wet &= d.min(axis=1) > params.standoff_m
+        w = np.flatnonzero(wet)
+        wet[w] = ~any_within(fl[w], dry, params.standoff_m, inclusive=True)
     out: FloatArray = fl[~wet]
     out.flags.writeable = False
     state.coarse.cache[key] = (k, out)

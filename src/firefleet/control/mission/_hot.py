@@ -19,6 +19,7 @@ import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.mission._coverage import CoarseMap
+from firefleet.control.mission._near import any_within
 
 __all__ = ["live_hot", "mark_hot", "probe_estimate", "retreat_point"]
 
@@ -185,8 +186,7 @@ def retreat_point(
     lo_xy, hi_xy = xy.min(axis=0) - clear_m, xy.max(axis=0) + clear_m
     away = away[np.all((away >= lo_xy) & (away <= hi_xy), axis=1)]
     if len(away):
-        d = np.hypot(xy[:, None, 0] - away[None, :, 0], xy[:, None, 1] - away[None, :, 1])
-        ok = d.min(axis=1) >= clear_m
+        ok = ~any_within(xy, away, clear_m, inclusive=False)
         xy, travel = xy[ok], travel[ok]
     if len(xy) == 0:
         return np.full(2, np.nan)
