@@ -66,3 +66,22 @@ def test_the_scenario_is_in_the_building() -> None:
     assert len(fires) == 10
     assert inside.any(axis=1).all()
     assert len(which) == 10
+
+
+def test_the_hose_cabinets_are_at_the_corridor_crossings() -> None:
+    """Twelve refill points, each in a corridor (inside no room, hall or the lobby) and
+    at least 1 m from a wall."""
+    scenario = load_scenario(LARGE)
+    assert scenario.world is not None
+    grid = scenario.world.grid()
+    points = np.array(scenario.command.refill_points_m)  # type: ignore[union-attr]
+    assert points.shape == (12, 2)
+    rooms = floor100_rooms()
+    inside = (
+        (points[:, None, 0] > rooms[None, :, 0])
+        & (points[:, None, 0] < rooms[None, :, 1])
+        & (points[:, None, 1] > rooms[None, :, 2])
+        & (points[:, None, 1] < rooms[None, :, 3])
+    )
+    assert not inside.any()
+    assert (clearance_m(grid, points) >= 1.0).all()
