@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from firefleet.control.mission import TacticsParams
-from firefleet.control.mission._plan import allocate, cut_demand, fire_demand, grow_demand
+from firefleet.control.mission._plan import allocate, cut_demand, fire_demand
 from firefleet.planning.allocation import allocate_tasks
 from firefleet.planning.exploration import assign_frontiers
 
@@ -126,20 +126,3 @@ def test_fire_demands_leave_explorers(n_work: int) -> None:
         assert np.all(out <= need)
         if n_work >= 20:
             assert n_work - out.sum() - victims >= explorers
-
-
-def test_grow_demand_counts_each_fires_recent_sprayers_only() -> None:
-    """Demand capped at one more than the fighters of that fire that sprayed within
-    ``grow_s`` (the boundary inclusive), never under ``fire_robots_min`` nor over the
-    demand asked; a sprayer of another fire or without a fire does not count."""
-    p = TacticsParams(fire_robots_min=2, fire_robots_max=6, grow_s=20.0)
-    ids = np.array([3, 5, 8])
-    task = np.array([3, 3, 3, 3, 5, 5, -1, 8])
-    t = 100.0
-    sprayed = np.array([100.0, 80.0, 79.9, 99.0, 99.0, -np.inf, 100.0, 100.0])
-    # fire 3: robots 0, 1 (80.0: exactly 20 s), 3 -> 3 sprayers, cap 4
-    # fire 5: robot 4 -> cap max(2, 2) = 2; fire 8: robot 7 -> cap 2, asked 1 -> 1
-    got = grow_demand(np.array([6, 6, 1]), ids, task, sprayed, t, p)
-    assert got.tolist() == [4, 2, 1]
-    never = np.full(len(task), -np.inf)
-    assert grow_demand(np.array([6, 6, 6]), ids, task, never, t, p).tolist() == [2, 2, 2]

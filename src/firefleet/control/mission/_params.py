@@ -192,14 +192,6 @@ class TacticsParams:
         place [m] (:mod:`._keepout`; 0: not at all).
     hot_cost : float
         That price per metre (the map's free cells cost 1 per metre).
-    grow_s : float
-        A fire needs at most one robot more than its fighters that sprayed within
-        this long, and ``fire_robots_min`` at least [s] (0, the default: off; the
-        mission kind turns it on for large teams): a robot more goes
-        only where every one there has a shot but one (a room's door has room to spray
-        from for one or two: on mission-large, at 150-240 s, 14-22 of 26-31 fighters had
-        not sprayed for 10 s, most with full tanks, while four fires burned on, none out,
-        and six more went unfound).
     spare_fight : bool
         Robots with nothing left to explore join a burning fire past
         ``fire_robots_max`` (:mod:`._spare`; default off until measured on every
@@ -273,8 +265,6 @@ class TacticsParams:
     hot_cost: float = 20.0
     # untuned2
     spare_fight: bool = False
-    # large teams
-    grow_s: float = 0.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -332,7 +322,6 @@ class TacticsParams:
                 "fire_block_m",
                 "flame_guard_m",
                 "probe_lag_s",
-                "grow_s",
             ),
         )
         # people

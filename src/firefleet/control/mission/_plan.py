@@ -33,7 +33,7 @@ from firefleet.control.mission._coverage import CoarseMap
 from firefleet.control.mission._params import TacticsParams
 from firefleet.planning.allocation import allocate_tasks
 
-__all__ = ["allocate", "cut_demand", "fire_demand", "grow_demand", "task_distances"]
+__all__ = ["allocate", "cut_demand", "fire_demand", "task_distances"]
 
 
 _CACHE_MAX = 64
@@ -44,38 +44,6 @@ def fire_demand(extent_m: FloatArray, params: TacticsParams) -> IntArray:
     """Robots each fire needs (module notes), shape (F,)."""
     k = params.fire_robots_min + np.floor(np.asarray(extent_m) / params.robot_per_fire_m)
     out: IntArray = np.clip(k, params.fire_robots_min, params.fire_robots_max).astype(np.int64)
-    return out
-
-
-def grow_demand(
-    need: IntArray,
-    ids: IntArray,
-    task_fire: IntArray,
-    spray_s: FloatArray,
-    t_s: float,
-    params: TacticsParams,
-) -> IntArray:
-    """The fires' demands (F,) capped at one more than the fire's fighters that sprayed
-    within ``grow_s`` before ``t_s``, and at least ``fire_robots_min``
-    (``TacticsParams.grow_s``): a fire gets one robot more whenever all its fighters but
-    one have a shot.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from firefleet.control.mission import TacticsParams
-    >>> p = TacticsParams(fire_robots_min=2, grow_s=20.0)
-    >>> task = np.array([7, 7, 7, 9, 9, -1])
-    >>> sprayed = np.array([95.0, 90.0, -np.inf, 50.0, 99.0, 99.0])  # at t = 100 s
-    >>> grow_demand(np.array([6, 6]), np.array([7, 9]), task, sprayed, 100.0, p).tolist()
-    [3, 2]
-    """
-    sprayed = np.asarray(spray_s, dtype=float)
-    fresh = np.isfinite(sprayed) & (sprayed >= t_s - params.grow_s)
-    out = np.array(need, dtype=np.int64)
-    for f, fid in enumerate(np.asarray(ids).tolist()):
-        shots = int(np.sum(fresh & (task_fire == fid)))
-        out[f] = min(out[f], max(params.fire_robots_min, shots + 1))
     return out
 
 

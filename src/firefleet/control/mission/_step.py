@@ -43,7 +43,6 @@ from firefleet.control.mission._plan import (
     allocate,
     cut_demand,
     fire_demand,
-    grow_demand,
     task_distances,
 )
 from firefleet.control.mission._quiet import EPS_S as _EPS_S
@@ -117,8 +116,6 @@ def _plan(
     open_v = np.flatnonzero(~k.victim_confirmed & ~k.dismissed(params))
     task_xy = np.vstack([fxy, k.victim_xy_m[open_v]])
     need = fire_demand(fext, params)
-    if params.grow_s > 0.0 and len(state.spray_s) == n:
-        need = grow_demand(need, ids, state.task_fire, state.spray_s, state.t_s, params)
     cm = state.coarse
     floor = int(cm.floor.sum())
     if (cm.floor & ~state.covered_coarse).sum() > 0.02 * floor and n_fires:
@@ -402,16 +399,12 @@ def _orders(
         mode=mode.astype(np.int8),
         goal_xy_m=state.goal_xy_m.copy(),
     )
-    spray_s = state.spray_s
-    if spray.any():
-        spray_s = np.where(spray, obs.t_s, spray_s if len(spray_s) else -np.inf)
     return replace(
         state,
         nav=nav,
         orders=orders,
         refilling=refilling,
         shot_s=shot_s,
-        spray_s=spray_s,
         goal_xy_m=goals,
         pending=pending,
     )

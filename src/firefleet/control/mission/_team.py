@@ -125,8 +125,6 @@ class TacticsState:
     air_prev_s: float = -np.inf
     refill_group: IntArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     """The refill point of each spot of ``refill_spots_m`` (K,) (empty: all one point)."""
-    spray_s: FloatArray = field(default_factory=lambda: np.zeros(0))
-    """When each robot was last ordered to spray [s] (N,) (-inf: never; empty: none)."""
 
     @property
     def covered(self) -> BoolArray:
@@ -290,5 +288,4 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         base_costmap=nav.costmap,
         t_s=-np.inf,
         refill_group=group,
-        spray_s=np.full(n, -np.inf),
     )

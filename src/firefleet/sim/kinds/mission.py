@@ -94,9 +94,6 @@ METRIC_NAMES = (
 REFILL_L_S = 2.0
 """Refill rate at the refill point [L/s] (a hose at the entrance)."""
 
-LARGE_TEAM = 12
-"""Robots from which a team's fires grow their demand with their shots (``grow_s``)."""
-
 ROBOT_RECORD_S = 0.1
 """The robots' series (poses, the wheel stack's quantities, the decision's ``mode``,
 ``spray``, ``tank_l``) are recorded at most this often [s], the tactics' rate: every
@@ -301,11 +298,6 @@ def _init(scenario: Scenario) -> tuple[Any, MissionParams]:
         # a fire never takes the whole team: one robot at least keeps searching for people
         fire_robots_max=max(1, min(6, scenario.n_robots - 1)),
         fire_robots_min=min(2, max(1, scenario.n_robots - 1)),
-        # a large team sends a fire one robot more only while all its fighters but one
-        # have a shot (TacticsParams.grow_s); a team of a few has room at its fires
-        # (mission-warehouse, 6 robots: all out 92-240 s later on seeds 1-4 with it, 211 s
-        # sooner on seed 0)
-        grow_s=20.0 if scenario.n_robots >= LARGE_TEAM else 0.0,
         # the lighter dynamic window (5 x 9 candidates over 8 steps, control.mission's
         # notes): four times cheaper than navigate's 9 x 21 x 15, and on mission-office
         # seed 0 the finer one left a victim unfound and two robots touching
