@@ -15,8 +15,9 @@
    counts the other processes' work too.
 
 3. **mission-large** (50 robots on floor100, 100 m x 100 m, 10 fires; kept in examples/
-   like mission-office): ``LARGE_S`` simulated seconds (the start: 50 first plans out
-   of the lobby, exploration), the same split. Floor of issue 15: >= 5x real time.
+   until its claims pass, while mission-office is built in): ``LARGE_S`` simulated
+   seconds (the start: 50 first plans out of the lobby, exploration), the same split.
+   Floor of issue 15: >= 5x real time.
 
 4. **Memory of mission-large** (``MEMORY_S`` simulated seconds, in runs of their own
    under ``tracemalloc``, not timed): the size of ``result.npz`` and the peak of the
