@@ -274,3 +274,38 @@ def test_the_water_on_the_floor_is_the_water_sprayed() -> None:
     assert float(wet[-1].sum()) * area == pytest.approx(used, abs=tol)
     assert np.all(np.diff(wet.sum(axis=(1, 2))) >= 0.0)  # it only accumulates
     assert float(wet[0].sum()) < float(wet[-1].sum())
+
+
+def test_a_tank_fills_only_at_a_refill_point() -> None:
+    """The team says two robots are refilling; the world fills the one whose true
+    position lies within ``refill_reach_m`` of the refill point (the start poses'
+    centroid) at ``refill_l_s`` and leaves the one 3 m off empty: the team's word is
+    checked against the truth."""
+    scenario = _short(OFFICE, 10.0)
+    world = mission_world(scenario)
+    c = np.asarray(scenario.poses, dtype=float)[:, :2].mean(axis=0)
+    assert world.refill_xy_m is not None
+    np.testing.assert_allclose(world.refill_xy_m, [c])
+    state = dataclasses.replace(world.init(2), tank_l=np.zeros(2))
+    order = {"spray": np.zeros(2, bool), "refill": np.ones(2, bool)}
+    # 1.2 m off the point (inside the reach), and 3 m off it
+    pose = np.array([[c[0] + 1.2, c[1], 0.0], [c[0], c[1] + 3.0, 0.0]])
+    t_s = 0.0
+    for _ in range(10):  # 1 s
+        state = world.step(world.act(state, order, pose), t_s)
+        t_s += world.world_step_s
+    assert state.tank_l[0] == pytest.approx(world.refill_l_s * 1.0)
+    assert state.tank_l[1] == 0.0
+    reach = world.refill_reach_m
+    edge = np.array([[c[0] + reach, c[1], 0.0], [c[0] + reach + 1e-6, c[1], 0.0]])
+    assert world.at_refill(edge).tolist() == [True, False]
+    assert world.at_refill(np.full((1, 3), np.nan)).tolist() == [False]
+
+
+def test_the_world_fills_at_every_refill_point_given() -> None:
+    """``command.refill_m`` with two points: the world fills at either, not between."""
+    scenario = _short(OFFICE, 10.0)
+    cmd = dataclasses.replace(scenario.command, refill_m=((1.0, 1.0), (10.0, 5.0)))
+    world = mission_world(dataclasses.replace(scenario, command=cmd))
+    pose = np.array([[1.0, 1.5, 0.0], [10.5, 5.0, 0.0], [5.5, 3.0, 0.0]])
+    assert world.at_refill(pose).tolist() == [True, True, False]

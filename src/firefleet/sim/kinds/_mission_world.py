@@ -184,6 +184,12 @@ class MissionWorld:
         Each fire's first cell; ``fire_start_s`` (F,) when it ignites [s].
     victim_cells : ndarray of int, shape (V, 2)
         The field cell each victim breathes in; ``victim_xy_m`` (V, 2) where they are.
+    refill_xy_m : ndarray, shape (P, 2)
+        Where tanks fill [m] (a standpipe or hose cabinets): a robot the team says is
+        refilling fills only if its true position lies within ``refill_reach_m`` of one
+        (the team's word is checked against the truth, as the spray is; a robot whose
+        pose estimate has drifted a metre and more from the truth stands short and
+        gets nothing). None: anywhere (no check).
     """
 
     field: OccupancyGrid
@@ -205,6 +211,19 @@ class MissionWorld:
     found_radius_m: float = 2.0
     pt100: Pt100Params = dataclasses.field(default_factory=Pt100Params)
     contacts: Any = None  # _mission_contacts.ContactCheck: the robots' contacts every tick
+    refill_xy_m: FloatArray | None = None
+    refill_reach_m: float = 1.5  # the team stands within 1 m of a point by its estimate
+
+    def at_refill(self, pose: FloatArray) -> np.ndarray:
+        """Whether each robot's true position (N, 3) lies within ``refill_reach_m`` of
+        a refill point (NaN poses: no; no points set: every robot)."""
+        p = np.asarray(pose, dtype=float).reshape(-1, 3)
+        if self.refill_xy_m is None:
+            return np.ones(len(p), dtype=bool)
+        q = np.asarray(self.refill_xy_m, dtype=float).reshape(-1, 2)
+        d = np.hypot(p[:, None, 0] - q[None, :, 0], p[:, None, 1] - q[None, :, 1])
+        out: np.ndarray = (d <= self.refill_reach_m).any(axis=1)
+        return out
 
     def init(self, n_robots: int) -> MissionWorldState:
         """The world before the first tick: nothing burning yet, ambient air."""
@@ -299,7 +318,7 @@ class MissionWorld:
             tank = tank - used
             log["water_used_l"] = log["water_used_l"] + used
         tank = np.where(
-            state.refill & ~state.damaged,
+            state.refill & ~state.damaged & self.at_refill(state.pose),
             np.minimum(tank + self.refill_l_s * dt, self.tank_l),
             tank,
         )

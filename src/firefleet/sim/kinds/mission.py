@@ -172,7 +172,23 @@ def mission_world(scenario: Scenario) -> MissionWorld:
         pt100=pt100.params() if pt100 is not None else Pt100Params(),
         smoke_params=dataclasses.replace(SMOKE, source=SMOKE.source * spec.fuel.smoke_yield),
         contacts=ContactCheck.of(_grid(scenario), cmd.robot_radius_m) if cmd.robots else None,
+        # where tanks fill: the team's refill points (default: the start poses' centroid,
+        # as the team takes it), checked against the robots' true positions
+        refill_xy_m=_refill_points(scenario),
     )
+
+
+def _refill_points(scenario: Scenario) -> FloatArray | None:
+    """The refill points (P, 2) [m] the world fills tanks at: ``command.refill_m``, else
+    the start poses' centroid (as the team takes it); None without robots."""
+    points = _command(scenario).refill_points_m
+    if points:
+        return np.asarray(points, dtype=float).reshape(-1, 2)
+    poses = np.asarray(scenario.poses, dtype=float).reshape(-1, 3)
+    if len(poses) == 0:
+        return None
+    out: FloatArray = poses[:, :2].mean(axis=0)[None]
+    return out
 
 
 def _range_sensors(
