@@ -111,6 +111,35 @@ def test_an_empty_tank_goes_to_the_refill_point_nearest_by_travel() -> None:
         assert math.hypot(*(goal - want[k])) <= params.refill_radius_m
 
 
+def test_an_empty_tank_passes_a_hot_refill_point_for_a_clear_one() -> None:
+    """The two-room floor, the robot east of the wall at (5.4, 0.5): B at (6.5, 0.5) is
+    nearer, but a hot place the team marked 1 m from B (live: marked now) makes B hot
+    (within ``standoff_m``), so it goes to A through the door; the hot place forgotten
+    (``hot_forget_s`` later), B again. With B the only point it reaches (the door shut),
+    it goes to B hot or not (it waits there: ``refill_wait``)."""
+    from dataclasses import replace
+
+    from firefleet.control.mission import TacticsParams, tactics_init
+    from firefleet.control.mission._upkeep import tank_changes
+
+    points = ((1.0, 0.5), (6.5, 0.5))
+    params = TacticsParams(refill_xy_m=points)
+    pose = np.array([[5.4, 0.5, 0.0]])
+
+    def group_of(grid: OccupancyGrid, t_s: float) -> int:
+        state = tactics_init(grid, pose, params)
+        state = replace(state, hot_xy_m=np.array([[6.5, 1.5]]), hot_s=np.array([10.0]), t_s=t_s)
+        state = tank_changes(state, pose, np.zeros(1), np.ones(1, dtype=bool), params)
+        return int(state.refill_group[state.refill_spot[0]])
+
+    assert group_of(_two_rooms(), 10.0) == 0  # B hot: A
+    assert group_of(_two_rooms(), 10.0 + params.hot_forget_s + 1.0) == 1  # forgotten: B
+    shut = _two_rooms()
+    occ = shut.occupied.copy()
+    occ[:, 50] = True  # the wall from floor to ceiling: A unreachable
+    assert group_of(OccupancyGrid(occ, ~occ, resolution_m=0.1), 10.0) == 1
+
+
 def _two_rooms() -> OccupancyGrid:
     """10 m x 3 m at 0.1 m, outer walls, a wall at x = 5 m from y = 0 to y = 2.4 m."""
     occ = np.zeros((30, 100), dtype=bool)

@@ -72,7 +72,7 @@ def tank_changes(
         # the free spot nearest the point (spots come nearest first): one farther out,
         # nearer the robot, leaves it refilling up to 2 refill_radius_m from the point;
         # of several points, the one nearest the robot by travel
-        used = used + _farther_points(state, pose[i, :2]) * (len(spot) + 1)
+        used = used + _farther_points(state, pose[i, :2], params) * (len(spot) + 1)
         spot[i] = int(np.lexsort((np.arange(len(spots)), used))[0])
         goals[i] = spots[spot[i]]
         mode[i] = REFILL
@@ -92,9 +92,13 @@ def tank_changes(
     return retarget(new, goals, pose)
 
 
-def _farther_points(state: TacticsState, xy_m: FloatArray) -> IntArray:
+def _farther_points(state: TacticsState, xy_m: FloatArray, params: TacticsParams) -> IntArray:
     """0 for the spots of the refill point nearest ``xy_m`` (2,) by travel, 1 for the
-    others (K,); all 0 with one point. A point no travel reaches counts as farthest."""
+    others (K,); all 0 with one point. A point no travel reaches counts as farthest, and
+    so does a hot one (a spot of it within ``standoff_m`` of a live hot place or a dry
+    flame, :func:`refill_wait`'s test) while it reaches one that is not: an empty tank
+    sent to a hot cabinet waits there for the fire to pass (mission-large's hose
+    cabinets)."""
     group = state.refill_group
     if len(group) == 0 or group.max() == 0:
         return np.zeros(len(state.refill_spots_m), dtype=np.int64)
@@ -103,6 +107,19 @@ def _farther_points(state: TacticsState, xy_m: FloatArray) -> IntArray:
     to_spot = travel[cm.node_of(state.refill_spots_m)]
     to_point = np.full(int(group.max()) + 1, np.inf)
     np.minimum.at(to_point, group, to_spot)
+    away = np.vstack(
+        [
+            live_hot(state.hot_xy_m, state.hot_s, state.t_s, params.hot_forget_s),
+            dry_flames(state, params),
+        ]
+    )
+    if len(away):
+        spots = state.refill_spots_m
+        d = np.hypot(spots[:, None, 0] - away[None, :, 0], spots[:, None, 1] - away[None, :, 1])
+        hot = np.zeros(len(to_point), dtype=bool)
+        hot[group[d.min(axis=1) < params.standoff_m]] = True
+        # after every clear point it reaches, before any it does not reach
+        to_point = np.where(hot, to_point + 1e9, to_point)
     best = int(np.argmin(to_point))
     out: IntArray = (group != best).astype(np.int64)
     return out
