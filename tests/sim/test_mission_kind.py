@@ -309,3 +309,34 @@ def test_the_world_fills_at_every_refill_point_given() -> None:
     world = mission_world(dataclasses.replace(scenario, command=cmd))
     pose = np.array([[1.0, 1.5, 0.0], [10.5, 5.0, 0.0], [5.5, 3.0, 0.0]])
     assert world.at_refill(pose).tolist() == [True, True, False]
+
+
+@pytest.mark.parametrize(
+    "name", ["examples/missions/mission-maze.yaml", "mission-office"], ids=["maze", "office"]
+)
+def test_the_worlds_cells_are_the_teams_cells(name: str) -> None:
+    """The world's field and the team's coarse plan (both 0.25 m) are the same cells on
+    the maze, whose 168 rows are not a whole number of 5-row blocks (the field was
+    blocked from the bottom row and the plan from the top, 0.15 m apart), as on the
+    office (200 rows): each field cell's centre falls in the plan cell of the same
+    index, and both grids' cell centres coincide."""
+    from firefleet.control.mission import TacticsParams, tactics_init
+
+    root = Path(__file__).resolve().parents[2]
+    scenario = firefleet.load_scenario(root / name if name.endswith(".yaml") else name)
+    world = mission_world(scenario)
+    assert scenario.world is not None
+    state = tactics_init(scenario.world.grid(), scenario.poses, TacticsParams())
+    cm = state.coarse
+    assert cm.cell_m == world.field.resolution_m == 0.25
+    rc = np.argwhere(np.ones(world.field.shape, dtype=bool))
+    centres = world.field.center_of(rc)
+    np.testing.assert_array_equal(cm.cell_of(centres), rc)
+    # the plan's cell centres (its map cells' block centres) are the field's
+    h, _w = scenario.world.grid().shape
+    f = cm.factor
+    top = scenario.world.grid().center_of(np.array([0, 0]))  # map cell (0, 0)
+    res = scenario.world.grid().resolution_m
+    plan_centre = top + np.array([(f - 1) / 2 * res, -(f - 1) / 2 * res])
+    np.testing.assert_allclose(world.field.center_of(np.array([0, 0])), plan_centre, atol=1e-12)
+    assert h % f == (3 if "maze" in name else 0)

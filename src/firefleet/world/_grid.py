@@ -148,18 +148,22 @@ class OccupancyGrid:
         return ~inside | self.occupied[r, c]
 
 
-def coarsen(grid: OccupancyGrid, factor: int) -> OccupancyGrid:
+def coarsen(grid: OccupancyGrid, factor: int, *, keep: str = "bottom") -> OccupancyGrid:
     """The grid with ``factor x factor`` blocks of cells merged into one.
 
     A block is occupied when any of its cells is (a thin wall stays a wall), free when
     all of its cells are free, unknown otherwise. The grid is cropped to whole blocks
-    from its lower-left corner (the origin stays put).
+    from its lower-left corner (the origin stays put), or from its upper-left corner
+    (``keep="top"``: the rows a block grid counted from the array's first row keeps, as
+    the mission team's plan grid does; the origin moves up by the rows cropped below).
 
     Parameters
     ----------
     grid : OccupancyGrid
     factor : int
         Cells per side of a block, >= 1.
+    keep : {"bottom", "top"}, keyword-only
+        Which rows stay when the rows are not a whole number of blocks.
 
     Examples
     --------
@@ -169,9 +173,17 @@ def coarsen(grid: OccupancyGrid, factor: int) -> OccupancyGrid:
     >>> small = coarsen(OccupancyGrid(occupied, ~occupied, resolution_m=0.05), 2)
     >>> small.shape, small.resolution_m, small.occupied.astype(int).tolist()
     ((2, 3), 0.1, [[0, 0, 1], [0, 0, 0]])
+    >>> odd = np.zeros((5, 4), dtype=bool); odd[0, 0] = True  # 5 rows: one left over
+    >>> top = coarsen(OccupancyGrid(odd, ~odd, resolution_m=0.05), 2, keep="top")
+    >>> top.occupied.astype(int).tolist(), top.origin_m  # the top row kept, the origin up
+    ([[1, 0], [0, 0]], (0.0, 0.05))
+    >>> coarsen(OccupancyGrid(odd, ~odd, resolution_m=0.05), 2).occupied.any()  # bottom: lost
+    np.False_
     """
     if int(factor) != factor or factor < 1:
         raise InputError(f"coarsen: factor must be a whole number >= 1, got {factor!r}")
+    if keep not in ("bottom", "top"):
+        raise InputError(f"coarsen: keep must be 'bottom' or 'top', got {keep!r}")
     f = int(factor)
     h, w = grid.shape
     hc, wc = h // f, w // f
@@ -179,11 +191,17 @@ def coarsen(grid: OccupancyGrid, factor: int) -> OccupancyGrid:
         raise InputError(
             f"coarsen: map {grid.name!r} {grid.shape} is smaller than one block of {f}"
         )
-    rows = slice(h - hc * f, h)  # keep the bottom rows: the origin is the lower-left corner
+    origin = grid.origin_m
+    if keep == "top":
+        rows = slice(0, hc * f)
+        below = (h - hc * f) * grid.resolution_m
+        origin = (grid.origin_m[0], grid.origin_m[1] + below) if below else grid.origin_m
+    else:
+        rows = slice(h - hc * f, h)  # the bottom rows: the origin is the lower-left corner
     occ: BoolArray = np.asarray(
         grid.occupied[rows, : wc * f].reshape(hc, f, wc, f).any(axis=(1, 3))
     )
     free: BoolArray = np.asarray(grid.free[rows, : wc * f].reshape(hc, f, wc, f).all(axis=(1, 3)))
     return OccupancyGrid(
-        occ, free & ~occ, resolution_m=grid.resolution_m * f, origin_m=grid.origin_m, name=grid.name
+        occ, free & ~occ, resolution_m=grid.resolution_m * f, origin_m=origin, name=grid.name
     )

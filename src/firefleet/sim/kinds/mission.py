@@ -131,7 +131,11 @@ def mission_world(scenario: Scenario) -> MissionWorld:
     spec = scenario.world
     assert spec is not None  # _grid
     grid = _grid(scenario)
-    field = coarsen(grid, spec.field_factor(grid))
+    # blocks counted from the map's first row, as the team's plan grid counts them
+    # (control.mission's coarse map): the world's cells and the team's ledger of its
+    # water are the same cells. Kept from the bottom, on the maze (168 rows of 5) they
+    # lay 0.15 m apart, and the ledger held cells soaked that no water reached.
+    field = coarsen(grid, spec.field_factor(grid), keep="top")
     fuel = np.full(field.shape, spec.fuel.default)
     if spec.fuel.regions:
         h, w = field.shape
