@@ -304,9 +304,7 @@ def test_a_tank_fills_only_at_a_refill_point() -> None:
 
 def test_the_world_fills_at_every_refill_point_given() -> None:
     """``command.refill_m`` with two points: the world fills at either, not between."""
-    scenario = _short(OFFICE, 10.0)
-    cmd = dataclasses.replace(scenario.command, refill_m=((1.0, 1.0), (10.0, 5.0)))
-    world = mission_world(dataclasses.replace(scenario, command=cmd))
+    world = mission_world(_short(OFFICE, 10.0, refill_m=((1.0, 1.0), (10.0, 5.0))))
     pose = np.array([[1.0, 1.5, 0.0], [10.5, 5.0, 0.0], [5.5, 3.0, 0.0]])
     assert world.at_refill(pose).tolist() == [True, True, False]
 
