@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
@@ -28,6 +29,9 @@ from firefleet.control.navigation._costmap import Costmap
 from firefleet.errors import InputError
 
 __all__ = ["AStarResult", "astar", "astar_cells"]
+
+_MEMO_SIZE = 64
+"""Most plans :func:`astar` keeps per costmap (``Costmap._astar_memo``; the oldest goes)."""
 
 
 @numba.njit(cache=True)
@@ -222,6 +226,38 @@ def astar_cells(
     return cells, float(total)
 
 
+def _frozen(a: NDArray[Any]) -> bool:
+    """Whether an array's values cannot change: it and every array it views are
+    read-only, down to one that owns its data."""
+    base: object = a
+    while isinstance(base, np.ndarray):
+        if base.flags.writeable:
+            return False
+        base = base.base
+    return base is None
+
+
+def _astar_memoised(costmap: Costmap, sr: int, sc: int, gr: int, gc: int) -> tuple[IntArray, float]:
+    """:func:`_astar_kernel`'s cells (a new array) and total on ``costmap``, kept in
+    the costmap when its cost cannot change (:class:`Costmap`'s notes): the kernel is a
+    function of the cost grid, the two cells and the resolution alone."""
+    memo = costmap._astar_memo
+    frozen = _frozen(costmap.cost)
+    key = (sr, sc, gr, gc)
+    if frozen and key in memo:
+        cells, total = memo[key]
+        return np.array(cells), total
+    cost = np.ascontiguousarray(costmap.cost)
+    _check_size(cost.shape)
+    cells, total, _ = _astar_kernel(cost, sr, sc, gr, gc, costmap.grid.resolution_m)
+    total = float(total)
+    if frozen:
+        if len(memo) >= _MEMO_SIZE:
+            del memo[next(iter(memo))]
+        memo[key] = (cells.copy(), total)
+    return cells, total
+
+
 @dataclass(frozen=True, eq=False)
 class AStarResult:
     """What the global planner found.
@@ -294,10 +330,8 @@ def astar(costmap: Costmap, start_xy_m: ArrayLike, goal_xy_m: ArrayLike) -> ASta
         r, c = int(np.clip(rc[k, 0], 0, h - 1)), int(np.clip(rc[k, 1], 0, w - 1))
         if not inside[k] or costmap.blocked[r, c]:
             return AStarResult(f"{name}_blocked", None, None, math.inf)
-    cost = np.ascontiguousarray(costmap.cost)
-    _check_size(cost.shape)
-    cells, total, _ = _astar_kernel(
-        cost, int(rc[0, 0]), int(rc[0, 1]), int(rc[1, 0]), int(rc[1, 1]), grid.resolution_m
+    cells, total = _astar_memoised(
+        costmap, int(rc[0, 0]), int(rc[0, 1]), int(rc[1, 0]), int(rc[1, 1])
     )
     if cells.shape[0] == 0:
         return AStarResult("unreachable", None, None, math.inf)
