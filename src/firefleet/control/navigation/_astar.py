@@ -76,10 +76,15 @@ def _heap_pop(keys: FloatArray, items: NDArray[np.int32], size: int) -> int:  # 
 
 
 @numba.njit(cache=True)
-def _astar_kernel(
-    cost: FloatArray, sr: int, sc: int, gr: int, gc: int, res: float
-) -> tuple[IntArray, float, int]:  # pragma: no cover - compiled
-    """Cells (K, 2) of the cheapest path, its cost [m], cells expanded; K = 0 if none."""
+def _search(
+    cost: FloatArray, sr: int, sc: int, gr: int, gc: int, res: float, cap: int
+) -> tuple[IntArray, float, int, bool]:  # pragma: no cover - compiled
+    """:func:`_astar_kernel` with a heap of ``cap`` entries; the last value is False
+    (and the rest no answer) when an expansion might overflow it.
+
+    The heap is never grown in place: an array variable assigned again inside the loop
+    costs the loop ~15 % (reference counts), and the search with a larger heap makes
+    the same heap operations in the same order, so it is searched again instead."""
     h, w = cost.shape
     # a padded flat copy: one border of blocked cells spares the bounds checks
     wp = w + 2
@@ -91,7 +96,6 @@ def _astar_kernel(
     g = np.full(n, np.inf)
     parent = np.full(n, -1, dtype=np.int32)
     closed = np.zeros(n, dtype=np.bool_)
-    cap = 1 << 16
     keys = np.empty(cap)
     items = np.empty(cap, dtype=np.int32)
     sq2 = math.sqrt(2.0)
@@ -110,6 +114,8 @@ def _astar_kernel(
         expanded += 1
         if cur == goal:
             break
+        if size + 8 > cap:  # eight pushes might not fit
+            return np.empty((0, 2), dtype=np.int64), np.inf, expanded, False
         gcur = g[cur]
         ccur = cf[cur]
         for k in range(8):
@@ -149,17 +155,9 @@ def _astar_kernel(
                 ddy = abs(nr - 1 - gr)
                 ddx = abs(nxt - nr * wp - 1 - gc)
                 hn = res * max(ddx, ddy) + hd * min(ddx, ddy)
-                if size == cap:
-                    cap *= 2
-                    keys2 = np.empty(cap)
-                    items2 = np.empty(cap, dtype=np.int32)
-                    keys2[:size] = keys[:size]
-                    items2[:size] = items[:size]
-                    keys = keys2
-                    items = items2
                 size = _heap_push(keys, items, size, gn + hn, nxt)
     if not closed[goal]:
-        return np.empty((0, 2), dtype=np.int64), np.inf, expanded
+        return np.empty((0, 2), dtype=np.int64), np.inf, expanded, True
     count = 1
     cur = goal
     while cur != start:
@@ -172,7 +170,23 @@ def _astar_kernel(
         out[i, 0] = rr - 1
         out[i, 1] = cur - rr * wp - 1
         cur = parent[cur]
-    return out, g[goal], expanded
+    return out, g[goal], expanded, True
+
+
+@numba.njit(cache=True)
+def _astar_kernel(
+    cost: FloatArray, sr: int, sc: int, gr: int, gc: int, res: float, heap: int = 1 << 16
+) -> tuple[IntArray, float, int]:  # pragma: no cover - compiled
+    """Cells (K, 2) of the cheapest path, its cost [m], cells expanded; K = 0 if none.
+
+    ``heap`` is the first heap's size (entries); a search that might outgrow it is made
+    again with four times as many (:func:`_search`)."""
+    cap = max(heap, 16)
+    while True:
+        out, total, expanded, done = _search(cost, sr, sc, gr, gc, res, cap)
+        if done:
+            return out, total, expanded
+        cap *= 4
 
 
 def _check_size(shape: tuple[int, ...]) -> None:
