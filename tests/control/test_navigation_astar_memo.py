@@ -10,7 +10,16 @@ import numpy as np
 import pytest
 
 import firefleet.control.navigation._astar as astar_module
-from firefleet.control.navigation import Costmap, astar, build_costmap
+from firefleet.control.navigation import (
+    Costmap,
+    NavigationInputs,
+    NavigationParams,
+    astar,
+    build_costmap,
+    navigation_init,
+    navigation_retarget,
+    navigation_step,
+)
 from firefleet.world import OccupancyGrid
 
 
@@ -135,3 +144,67 @@ def test_a_replaced_costmap_starts_empty() -> None:
     astar(cm, [0.5, 0.5], [4.0, 2.5])
     assert len(cm._astar_memo) == 1
     assert replace(cm, inflation_m=cm.inflation_m)._astar_memo == {}
+
+
+def test_plans_pass_to_an_equal_costmap_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    cm = _rooms()
+    pairs = [([0.5, 0.5], [4.0, 2.5]), ([1.0, 2.5], [3.5, 0.5])]
+    first = [astar(cm, a, b) for a, b in pairs]
+    calls = _counting(monkeypatch)
+    same = _fresh(cm)  # a new object with the same (frozen) cost grid
+    astar_module.adopt_plans(same, cm)
+    assert [_same(astar(same, a, b), r) for (a, b), r in zip(pairs, first, strict=True)] == [
+        True,
+        True,
+    ]
+    assert calls == []
+    # an equal grid in another array is adopted too
+    copied = np.array(cm.cost)
+    copied.setflags(write=False)
+    twin = Costmap(cm.grid, cm.clearance_m, cm.blocked, copied, cm.inflation_m)
+    astar_module.adopt_plans(twin, cm)
+    assert len(twin._astar_memo) == 2
+    # not: another price, a cost grid that may change, a costmap with plans of its own
+    dearer = np.array(cm.cost)
+    dearer[:, 60:] += 1.0
+    dearer.setflags(write=False)
+    for cost in (dearer, np.array(cm.cost)):
+        other = Costmap(cm.grid, cm.clearance_m, cm.blocked, cost, cm.inflation_m)
+        astar_module.adopt_plans(other, cm)
+        assert other._astar_memo == {}
+    own = _fresh(cm)
+    astar(own, [2.0, 0.5], [2.0, 2.5])
+    astar_module.adopt_plans(own, cm)
+    assert len(own._astar_memo) == 1
+    assert calls == [1]
+    # another resolution: the same numbers are another map
+    coarse = OccupancyGrid(~cm.grid.free, cm.grid.free, 0.1)
+    scaled = Costmap(coarse, cm.clearance_m, cm.blocked, cm.cost, cm.inflation_m)
+    astar_module.adopt_plans(scaled, cm)
+    assert scaled._astar_memo == {}
+
+
+def test_navigation_adopts_the_plans_of_its_last_costmap(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A caller swapping the navigation's costmap for an equal one (the mission prices
+    the fires anew at every plan) plans nothing again: the step's outputs are those of
+    the step on the old costmap."""
+    cm = _rooms()
+    params = NavigationParams()
+    pose = np.array([[0.6, 0.6, 0.0], [0.6, 2.4, 0.0]])
+    goals = np.array([[4.0, 2.5], [4.0, 0.6]])
+    state = navigation_init(cm.grid, pose, goals, params)
+    inputs = NavigationInputs(pose, {}, pose[:, :2], 0.0)
+    state, _, _ = navigation_step(state, inputs, params, 0.1)
+    assert state.planned_on is state.costmap
+    again = navigation_retarget(state, goals, [True, True])
+    calls = _counting(monkeypatch)
+    ref, v_ref, w_ref = navigation_step(again, inputs, params, 0.1)
+    made = len(calls)
+    swapped = replace(again, costmap=_fresh(again.costmap))
+    new, v, w = navigation_step(swapped, inputs, params, 0.1)
+    assert len(calls) == made
+    assert new.planned_on is swapped.costmap
+    assert v.tobytes() == v_ref.tobytes()
+    assert w.tobytes() == w_ref.tobytes()
+    for a, b in zip(new.samples, ref.samples, strict=True):
+        assert a.tobytes() == b.tobytes()

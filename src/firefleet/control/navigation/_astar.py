@@ -272,6 +272,20 @@ def _astar_memoised(costmap: Costmap, sr: int, sc: int, gr: int, gc: int) -> tup
     return cells, total
 
 
+def adopt_plans(costmap: Costmap, other: Costmap) -> None:
+    """Give ``costmap`` the plans kept in ``other`` (``Costmap._astar_memo``) when it
+    has none of its own and the two plan alike: both cost grids frozen and equal
+    element for element, at the same resolution (the kernel reads nothing else)."""
+    if costmap._astar_memo or not other._astar_memo:
+        return
+    if costmap.grid.resolution_m != other.grid.resolution_m:
+        return
+    if not (_frozen(costmap.cost) and _frozen(other.cost)):
+        return
+    if costmap.cost is other.cost or np.array_equal(costmap.cost, other.cost):
+        costmap._astar_memo.update(other._astar_memo)
+
+
 @dataclass(frozen=True, eq=False)
 class AStarResult:
     """What the global planner found.
