@@ -11,6 +11,7 @@ import scipy.ndimage as ndi
 
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap
+from firefleet.control.mission._discs import disc_cells
 from firefleet.control.mission._hot import live_hot
 from firefleet.control.mission._knowledge import fires_of
 from firefleet.control.mission._near import any_within
@@ -395,20 +396,9 @@ def _ring(
 
 
 def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArray:
-    """Map cells whose centres lie within ``radius_m`` of any point ``xy`` (M, 2)."""
-    grid_shape = grid.shape
-    h, w = grid_shape
-    k = math.ceil(radius_m / grid.resolution_m) + 1
-    out = np.zeros(grid_shape, dtype=bool)
-    for p in xy:
-        r, c = (int(v) for v in grid.cell_of(p))
-        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
-        if r0 >= r1 or c0 >= c1:
-            continue
-        rr, cc = np.mgrid[r0:r1, c0:c1]
-        centres = grid.center_of(np.stack([rr, cc], axis=-1))
-        out[r0:r1, c0:c1] |= np.hypot(centres[..., 0] - p[0], centres[..., 1] - p[1]) <= radius_m
-    return out
+    """Map cells whose centres lie within ``radius_m`` of any point ``xy`` (M, 2)
+    (:func:`._discs.disc_cells`, one compiled pass)."""
+    return disc_cells(grid, xy, radius_m)
 
 
 def fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -> TacticsState:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
@@ -28,6 +29,9 @@ from firefleet.control.navigation._costmap import Costmap
 from firefleet.errors import InputError
 
 __all__ = ["AStarResult", "astar", "astar_cells"]
+
+_MEMO_SIZE = 64
+"""Most plans :func:`astar` keeps per costmap (``Costmap._astar_memo``; the oldest goes)."""
 
 
 @numba.njit(cache=True)
@@ -72,10 +76,15 @@ def _heap_pop(keys: FloatArray, items: NDArray[np.int32], size: int) -> int:  # 
 
 
 @numba.njit(cache=True)
-def _astar_kernel(
-    cost: FloatArray, sr: int, sc: int, gr: int, gc: int, res: float
-) -> tuple[IntArray, float, int]:  # pragma: no cover - compiled
-    """Cells (K, 2) of the cheapest path, its cost [m], cells expanded; K = 0 if none."""
+def _search(
+    cost: FloatArray, sr: int, sc: int, gr: int, gc: int, res: float, cap: int
+) -> tuple[IntArray, float, int, bool]:  # pragma: no cover - compiled
+    """:func:`_astar_kernel` with a heap of ``cap`` entries; the last value is False
+    (and the rest no answer) when an expansion might overflow it.
+
+    The heap is never grown in place: an array variable assigned again inside the loop
+    costs the loop ~15 % (reference counts), and the search with a larger heap makes
+    the same heap operations in the same order, so it is searched again instead."""
     h, w = cost.shape
     # a padded flat copy: one border of blocked cells spares the bounds checks
     wp = w + 2
@@ -87,7 +96,6 @@ def _astar_kernel(
     g = np.full(n, np.inf)
     parent = np.full(n, -1, dtype=np.int32)
     closed = np.zeros(n, dtype=np.bool_)
-    cap = 1 << 16
     keys = np.empty(cap)
     items = np.empty(cap, dtype=np.int32)
     sq2 = math.sqrt(2.0)
@@ -106,6 +114,8 @@ def _astar_kernel(
         expanded += 1
         if cur == goal:
             break
+        if size + 8 > cap:  # eight pushes might not fit
+            return np.empty((0, 2), dtype=np.int64), np.inf, expanded, False
         gcur = g[cur]
         ccur = cf[cur]
         for k in range(8):
@@ -145,17 +155,9 @@ def _astar_kernel(
                 ddy = abs(nr - 1 - gr)
                 ddx = abs(nxt - nr * wp - 1 - gc)
                 hn = res * max(ddx, ddy) + hd * min(ddx, ddy)
-                if size == cap:
-                    cap *= 2
-                    keys2 = np.empty(cap)
-                    items2 = np.empty(cap, dtype=np.int32)
-                    keys2[:size] = keys[:size]
-                    items2[:size] = items[:size]
-                    keys = keys2
-                    items = items2
                 size = _heap_push(keys, items, size, gn + hn, nxt)
     if not closed[goal]:
-        return np.empty((0, 2), dtype=np.int64), np.inf, expanded
+        return np.empty((0, 2), dtype=np.int64), np.inf, expanded, True
     count = 1
     cur = goal
     while cur != start:
@@ -168,7 +170,23 @@ def _astar_kernel(
         out[i, 0] = rr - 1
         out[i, 1] = cur - rr * wp - 1
         cur = parent[cur]
-    return out, g[goal], expanded
+    return out, g[goal], expanded, True
+
+
+@numba.njit(cache=True)
+def _astar_kernel(
+    cost: FloatArray, sr: int, sc: int, gr: int, gc: int, res: float, heap: int = 1 << 16
+) -> tuple[IntArray, float, int]:  # pragma: no cover - compiled
+    """Cells (K, 2) of the cheapest path, its cost [m], cells expanded; K = 0 if none.
+
+    ``heap`` is the first heap's size (entries); a search that might outgrow it is made
+    again with four times as many (:func:`_search`)."""
+    cap = max(heap, 16)
+    while True:
+        out, total, expanded, done = _search(cost, sr, sc, gr, gc, res, cap)
+        if done:
+            return out, total, expanded
+        cap *= 4
 
 
 def _check_size(shape: tuple[int, ...]) -> None:
@@ -220,6 +238,52 @@ def astar_cells(
     if cells.shape[0] == 0:
         return None, math.inf
     return cells, float(total)
+
+
+def _frozen(a: NDArray[Any]) -> bool:
+    """Whether an array's values cannot change: it and every array it views are
+    read-only, down to one that owns its data."""
+    base: object = a
+    while isinstance(base, np.ndarray):
+        if base.flags.writeable:
+            return False
+        base = base.base
+    return base is None
+
+
+def _astar_memoised(costmap: Costmap, sr: int, sc: int, gr: int, gc: int) -> tuple[IntArray, float]:
+    """:func:`_astar_kernel`'s cells (a new array) and total on ``costmap``, kept in
+    the costmap when its cost cannot change (:class:`Costmap`'s notes): the kernel is a
+    function of the cost grid, the two cells and the resolution alone."""
+    memo = costmap._astar_memo
+    frozen = _frozen(costmap.cost)
+    key = (sr, sc, gr, gc)
+    if frozen and key in memo:
+        cells, total = memo[key]
+        return np.array(cells), total
+    cost = np.ascontiguousarray(costmap.cost)
+    _check_size(cost.shape)
+    cells, total, _ = _astar_kernel(cost, sr, sc, gr, gc, costmap.grid.resolution_m)
+    total = float(total)
+    if frozen:
+        if len(memo) >= _MEMO_SIZE:
+            del memo[next(iter(memo))]
+        memo[key] = (cells.copy(), total)
+    return cells, total
+
+
+def adopt_plans(costmap: Costmap, other: Costmap) -> None:
+    """Give ``costmap`` the plans kept in ``other`` (``Costmap._astar_memo``) when it
+    has none of its own and the two plan alike: both cost grids frozen and equal
+    element for element, at the same resolution (the kernel reads nothing else)."""
+    if costmap._astar_memo or not other._astar_memo:
+        return
+    if costmap.grid.resolution_m != other.grid.resolution_m:
+        return
+    if not (_frozen(costmap.cost) and _frozen(other.cost)):
+        return
+    if costmap.cost is other.cost or np.array_equal(costmap.cost, other.cost):
+        costmap._astar_memo.update(other._astar_memo)
 
 
 @dataclass(frozen=True, eq=False)
@@ -294,10 +358,8 @@ def astar(costmap: Costmap, start_xy_m: ArrayLike, goal_xy_m: ArrayLike) -> ASta
         r, c = int(np.clip(rc[k, 0], 0, h - 1)), int(np.clip(rc[k, 1], 0, w - 1))
         if not inside[k] or costmap.blocked[r, c]:
             return AStarResult(f"{name}_blocked", None, None, math.inf)
-    cost = np.ascontiguousarray(costmap.cost)
-    _check_size(cost.shape)
-    cells, total, _ = _astar_kernel(
-        cost, int(rc[0, 0]), int(rc[0, 1]), int(rc[1, 0]), int(rc[1, 1]), grid.resolution_m
+    cells, total = _astar_memoised(
+        costmap, int(rc[0, 0]), int(rc[0, 1]), int(rc[1, 0]), int(rc[1, 1])
     )
     if cells.shape[0] == 0:
         return AStarResult("unreachable", None, None, math.inf)

@@ -9,6 +9,7 @@ import numba
 import numpy as np
 
 from firefleet._typing import FloatArray
+from firefleet.control.navigation._astar import adopt_plans
 from firefleet.control.navigation._dwa import dwa_command
 from firefleet.control.navigation._makeway import (
     clear_of,
@@ -189,6 +190,8 @@ def navigation_step(
     n = state.goals_m.shape[0]
     pose = as_float_array(inputs.pose, "inputs.pose", (n, 3))
     mates = as_float_array(inputs.teammates_xy_m, "inputs.teammates_xy_m", (n, 2))
+    if state.planned_on is not None and state.planned_on is not state.costmap:
+        adopt_plans(state.costmap, state.planned_on)
     t = float(inputs.t_s)
     status = list(state.status)
     paths = list(state.paths)
@@ -451,6 +454,7 @@ def navigation_step(
         aside_of=aside,
         parked=parked,
         asked_s=asked,
+        planned_on=state.costmap,
     )
     return new, v, w
 

@@ -219,6 +219,10 @@ class NavigationState:
     asked_s : ndarray, shape (N,), or None
         When each standing robot was last found no spot to make way to [s] (it is not
         asked again within ``stuck_time_s``); None: never.
+    planned_on : Costmap or None
+        The ``costmap`` of the last step: when the caller gives the state a new costmap
+        with the same cost grid (the mission prices the fires anew at each plan), the
+        plans A* kept in the old one are the new one's too (:func:`._astar.adopt_plans`).
     """
 
     costmap: Costmap
@@ -239,6 +243,7 @@ class NavigationState:
     wall_tree: cKDTree | None = None
     parked: BoolArray | None = None
     asked_s: FloatArray | None = None
+    planned_on: Costmap | None = None
 
     @property
     def arrived(self) -> FloatArray:
