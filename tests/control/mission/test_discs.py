@@ -93,3 +93,19 @@ def test_edges() -> None:
     centre = grid.center_of(np.array([[5, 5]]))
     assert disc_cells(grid, centre, 100.0).all()
     assert disc_cells(grid, centre, 0.0).sum() == 1
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_hot_places_keep_out_is_the_same_disc(seed: int) -> None:
+    """``_keepout.near_points`` (the live hot places' price) was the same window code
+    as the reference: it is the reference's cells, and none for a radius of 0 or no
+    point."""
+    from firefleet.control.mission._keepout import near_points
+
+    rng = np.random.default_rng(seed)
+    grid = _grid(60, 90, 0.05, (0.5, -1.0))
+    xy = rng.uniform([0.0, -1.5], [5.5, 2.5], size=(7, 2))
+    for radius in (0.2, 1.0, 1.37):
+        assert np.array_equal(near_points(grid, xy, radius), _reference(grid, xy, radius))
+    assert not near_points(grid, xy, 0.0).any()
+    assert not near_points(grid, np.zeros((0, 2)), 1.0).any()

@@ -22,12 +22,12 @@ damaged).
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray
+from firefleet.control.mission._discs import disc_cells
 from firefleet.control.mission._hot import live_hot
 from firefleet.control.mission._params import TacticsParams
 from firefleet.control.mission._team import TacticsState
@@ -38,8 +38,8 @@ __all__ = ["heat_costmap", "near_points"]
 
 
 def near_points(grid: OccupancyGrid, xy_m: FloatArray, radius_m: float) -> BoolArray:
-    """Map cells (H, W) whose centres lie within ``radius_m`` of any point (K, 2) [m],
-    computed in a window about each point.
+    """Map cells (H, W) whose centres lie within ``radius_m`` of any point (K, 2) [m]
+    (:func:`._discs.disc_cells`, the fires' discs; none for a radius of 0).
 
     Examples
     --------
@@ -49,21 +49,10 @@ def near_points(grid: OccupancyGrid, xy_m: FloatArray, radius_m: float) -> BoolA
     >>> int(near_points(g, np.array([[0.55, 0.55]]), 0.2).sum())  # a centre, 4 + 4 + 4 more
     13
     """
-    h, w = grid.shape
-    out = np.zeros((h, w), dtype=bool)
     pts = np.asarray(xy_m, dtype=float).reshape(-1, 2)
     if len(pts) == 0 or radius_m <= 0.0:
-        return out
-    k = math.ceil(radius_m / grid.resolution_m) + 1
-    for p in pts:
-        r, c = (int(v) for v in grid.cell_of(p))
-        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
-        if r0 >= r1 or c0 >= c1:
-            continue
-        rr, cc = np.mgrid[r0:r1, c0:c1]
-        centres = grid.center_of(np.stack([rr, cc], axis=-1))
-        out[r0:r1, c0:c1] |= np.hypot(centres[..., 0] - p[0], centres[..., 1] - p[1]) <= radius_m
-    return out
+        return np.zeros(grid.shape, dtype=bool)
+    return disc_cells(grid, pts, radius_m)
 
 
 def heat_costmap(state: TacticsState, params: TacticsParams) -> TacticsState:
