@@ -89,7 +89,7 @@ def flame_reach(state: TacticsState, xy_m: FloatArray, params: TacticsParams) ->
     grid = state.nav.costmap.grid
     if params.fire_block_m > 0.0:
         k = state.knowledge
-        blocked |= _disc_mask(grid, k.spot_xy_m[k.spot_flame], params.fire_block_m)
+        blocked |= disc_cells(grid, k.spot_xy_m[k.spot_flame], params.fire_block_m)
     return _reachable(blocked, grid, xy_m)
 
 
@@ -395,12 +395,6 @@ def _ring(
     )
 
 
-def _disc_mask(grid: OccupancyGrid, xy: FloatArray, radius_m: float) -> BoolArray:
-    """Map cells whose centres lie within ``radius_m`` of any point ``xy`` (M, 2)
-    (:func:`._discs.disc_cells`, one compiled pass)."""
-    return disc_cells(grid, xy, radius_m)
-
-
 def fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -> TacticsState:
     """The navigation costmap round the fires: ``fire_cost`` more per metre within
     ``fire_keepout_m`` of every burning spot (A* goes round a fire where it can), and
@@ -414,10 +408,10 @@ def fire_costmap(state: TacticsState, pose: FloatArray, params: TacticsParams) -
             return state
         return replace(state, nav=replace(state.nav, costmap=base))
     grid = base.grid
-    near = _disc_mask(grid, spots, params.fire_keepout_m)
+    near = disc_cells(grid, spots, params.fire_keepout_m)
     cost = np.where(near, base.cost + params.fire_cost, base.cost)
     if params.fire_block_m > 0.0:
-        hot = _disc_mask(grid, spots, params.fire_block_m) & ~base.blocked
+        hot = disc_cells(grid, spots, params.fire_block_m) & ~base.blocked
         cost[hot] += 10.0 * params.fire_cost
     cost.setflags(write=False)
     costmap = Costmap(base.grid, base.clearance_m, base.blocked, cost, base.inflation_m)

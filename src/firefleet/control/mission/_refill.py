@@ -19,7 +19,26 @@ from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.mission._coverage import CoarseMap
 from firefleet.control.mission._hot import retreat_point
 
-__all__ = ["refill_goals"]
+__all__ = ["hot_spots", "refill_goals"]
+
+
+def hot_spots(spots_m: FloatArray, away_xy_m: FloatArray, clear_m: float) -> BoolArray:
+    """Whether each refill spot (R, 2) lies nearer than ``clear_m`` to a point of
+    ``away_xy_m`` (K, 2) [m] (the fire reaches it); none is hot without such points.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> hot_spots(np.array([[0.0, 0.0], [3.0, 0.0]]), np.array([[1.0, 0.0]]), 1.5).tolist()
+    [True, False]
+    """
+    spots = np.asarray(spots_m, dtype=float).reshape(-1, 2)
+    away = np.asarray(away_xy_m, dtype=float).reshape(-1, 2)
+    if len(away) == 0 or len(spots) == 0:
+        return np.zeros(len(spots), dtype=bool)
+    d = np.hypot(spots[:, None, 0] - away[None, :, 0], spots[:, None, 1] - away[None, :, 1])
+    out: BoolArray = d.min(axis=1) < clear_m
+    return out
 
 
 def refill_goals(
@@ -70,8 +89,7 @@ def refill_goals(
     goals = spots.copy()
     if len(away) == 0 or len(spots) == 0:
         return goals
-    d = np.hypot(spots[:, None, 0] - away[None, :, 0], spots[:, None, 1] - away[None, :, 1])
-    hot: BoolArray = d.min(axis=1) < clear_m
+    hot = hot_spots(spots, away, clear_m)
     stay = np.asarray(stay_xy_m, dtype=float).reshape(-1, 2)
     for i in map(int, np.flatnonzero(hot)):
         p = retreat_point(cm, spots[i], away, clear_m)

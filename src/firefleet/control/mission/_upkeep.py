@@ -20,7 +20,7 @@ from firefleet.control.mission._fight import dry_flames
 from firefleet.control.mission._hot import live_hot, mark_hot, retreat_point
 from firefleet.control.mission._params import DAMAGED, EXPLORE, FIGHT, IDLE, REFILL, TacticsParams
 from firefleet.control.mission._quiet import tank_flags
-from firefleet.control.mission._refill import refill_goals
+from firefleet.control.mission._refill import hot_spots, refill_goals
 from firefleet.control.mission._team import TacticsState
 from firefleet.control.navigation import navigation_retarget
 
@@ -107,21 +107,25 @@ def _farther_points(state: TacticsState, xy_m: FloatArray, params: TacticsParams
     to_spot = travel[cm.node_of(state.refill_spots_m)]
     to_point = np.full(int(group.max()) + 1, np.inf)
     np.minimum.at(to_point, group, to_spot)
-    away = np.vstack(
-        [
-            live_hot(state.hot_xy_m, state.hot_s, state.t_s, params.hot_forget_s),
-            dry_flames(state, params),
-        ]
+    spot_hot = hot_spots(
+        state.refill_spots_m, _refill_away(state, params, state.t_s), params.standoff_m
     )
-    if len(away):
-        spots = state.refill_spots_m
-        d = np.hypot(spots[:, None, 0] - away[None, :, 0], spots[:, None, 1] - away[None, :, 1])
+    if spot_hot.any():
         hot = np.zeros(len(to_point), dtype=bool)
-        hot[group[d.min(axis=1) < params.standoff_m]] = True
+        hot[group[spot_hot]] = True
         # after every clear point it reaches, before any it does not reach
         to_point = np.where(hot, to_point + 1e9, to_point)
     best = int(np.argmin(to_point))
     out: IntArray = (group != best).astype(np.int64)
+    return out
+
+
+def _refill_away(state: TacticsState, params: TacticsParams, t_s: float) -> FloatArray:
+    """What a refill spot keeps ``standoff_m`` from (K, 2) [m]: the live hot places and
+    the dry flames (:func:`refill_wait` and :func:`_farther_points` alike)."""
+    out: FloatArray = np.vstack(
+        [live_hot(state.hot_xy_m, state.hot_s, t_s, params.hot_forget_s), dry_flames(state, params)]
+    )
     return out
 
 
@@ -134,14 +138,11 @@ def refill_wait(
     who = working & (state.mode == REFILL) & (state.refill_spot >= 0)
     if not who.any():
         return state
-    away = np.vstack(
-        [live_hot(state.hot_xy_m, state.hot_s, t_s, params.hot_forget_s), dry_flames(state, params)]
-    )
     goals = state.goal_xy_m.copy()
     goals[who] = refill_goals(
         state.coarse,
         state.refill_spots_m[state.refill_spot[who]],
-        away,
+        _refill_away(state, params, t_s),
         params.standoff_m,
         pose[who, :2],
     )
