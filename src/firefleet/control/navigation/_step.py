@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numba
 import numpy as np
 
+from firefleet._frozen import replace
 from firefleet._typing import FloatArray
 from firefleet.control.navigation._astar import adopt_plans
 from firefleet.control.navigation._dwa import dwa_command

@@ -40,13 +40,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from firefleet._frozen import replace
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.navigation._astar import astar
 from firefleet.control.navigation._costmap import Costmap, build_costmap
