@@ -282,6 +282,23 @@ def cone_coverage(
     rel = np.linspace(-0.5 * hfov_rad, 0.5 * hfov_rad, n_rays)
     ang = pose[:, 2:3] + rel[None]  # (N, R)
     dist = np.arange(1, math.floor(range_m / step) + 1) * step  # (S,)
+    if np.isfinite(pose).all():  # the samples below in one compiled pass (_cone_kernel)
+        margin = 0.5 * cm.cell_m
+        view = in_view(
+            dist[None, :], rel[:, None], range_m, hfov_rad, near_m, half_width_m + margin
+        )
+        size = ang.size * dist.size
+        out_r, out_c = np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64)
+        ox, oy = (float(v) for v in cm.grid.origin_m)
+        hc, wc = cm.shape
+        grid = cm.grid
+        k = _cone_kernel(
+            np.ascontiguousarray(pose[:, 0]), np.ascontiguousarray(pose[:, 1]), np.cos(ang),
+            np.sin(ang), np.asarray(dist, dtype=np.float64), view, ox, oy,
+            float(grid.resolution_m), int(grid.shape[0]), int(grid.shape[1]), int(cm.factor),
+            hc, wc, cm.opaque, float(cm.cell_m), out_r, out_c,
+        )  # fmt: skip
+        return out_r[:k], out_c[:k]
     x = pose[:, 0, None, None] + dist * np.cos(ang)[..., None]  # (N, R, S)
     y = pose[:, 1, None, None] + dist * np.sin(ang)[..., None]
     xy = np.stack([x, y], axis=-1)
@@ -372,6 +389,54 @@ def _sight(
         float(cm.grid.resolution_m), int(cm.grid.shape[0]), int(cm.factor), cm.opaque,
         float(cm.cell_m), out,
     )  # fmt: skip
+
+
+@numba.njit(cache=True)
+def _cone_kernel(
+    px: FloatArray,
+    py: FloatArray,
+    cos_a: FloatArray,
+    sin_a: FloatArray,
+    dist: FloatArray,
+    view: BoolArray,
+    ox: float,
+    oy: float,
+    res: float,
+    rows: int,
+    cols: int,
+    factor: int,
+    hc: int,
+    wc: int,
+    opaque: BoolArray,
+    cell_m: float,
+    out_r: IntArray,
+    out_c: IntArray,
+) -> int:  # pragma: no cover - compiled
+    """:func:`cone_coverage`'s samples of finite poses in one pass, each the array
+    expressions' arithmetic (``x + d cos``, :meth:`OccupancyGrid.contains`,
+    :meth:`CoarseMap.cell_of`): the covered cells into ``out_r``, ``out_c`` in the
+    array form's order (robot, ray, sample); how many."""
+    k = 0
+    for n in range(cos_a.shape[0]):
+        for r in range(cos_a.shape[1]):
+            ca = cos_a[n, r]
+            sa = sin_a[n, r]
+            before = False  # an opaque sample before this one on the ray
+            for s in range(dist.size):
+                x = px[n] + dist[s] * ca
+                y = py[n] + dist[s] * sa
+                col = math.floor((x - ox) / res)
+                row = rows - 1 - math.floor((y - oy) / res)
+                on = row >= 0 and row < rows and col >= 0 and col < cols
+                cr = min(max(row // factor, 0), hc - 1)
+                cc = min(max(col // factor, 0), wc - 1)
+                if on and not before and view[r, s]:
+                    out_r[k] = cr
+                    out_c[k] = cc
+                    k += 1
+                if dist[s] >= cell_m and (not on or opaque[cr, cc]):
+                    before = True
+    return k
 
 
 @numba.njit(cache=True)
