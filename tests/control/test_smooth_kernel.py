@@ -74,6 +74,44 @@ def test_give_way_conflict_equals_numpy() -> None:
         assert _conflict(mine, theirs, me, gap) == want
 
 
+def test_give_way_conflict_skips_only_pairs_hypot_would_reject() -> None:
+    """The box test before each hypot (|dx| or |dy| at least the gap): the kernel before
+    it (a hypot for every pair, in Python here) on pairs at the gap's edge, axis-aligned
+    and not, and with NaN and infinite coordinates."""
+    import math
+
+    from firefleet.control.navigation._step import _conflict
+
+    def before(
+        mine_a: np.ndarray, theirs_a: np.ndarray, me_a: np.ndarray, gap: float
+    ) -> tuple[bool, bool]:
+        mine, theirs, me = mine_a.tolist(), theirs_a.tolist(), me_a.tolist()  # floats
+        in_way = any(math.hypot(t[0] - me[0], t[1] - me[1]) < gap for t in theirs)
+        meets = any(math.hypot(m[0] - t[0], m[1] - t[1]) < gap for m in mine for t in theirs)
+        return meets, in_way
+
+    rng = np.random.default_rng(7)
+    gap = 0.5
+    edge = np.array([np.nextafter(gap, 0.0), gap, np.nextafter(gap, 1.0)])
+    checked = set()
+    for _ in range(3000):
+        mine = rng.uniform(0.0, 1.0, (int(rng.integers(1, 5)), 2))
+        theirs = mine[rng.integers(0, len(mine), int(rng.integers(1, 5)))].copy()
+        # offsets at the gap's edge along an axis, or a hair off it
+        off = rng.choice(edge, (len(theirs), 1)) * rng.choice([-1.0, 1.0], (len(theirs), 2))
+        off[:, int(rng.integers(0, 2))] *= rng.choice([0.0, 1e-9, 0.3, 1.0])
+        theirs = theirs + off
+        if rng.random() < 0.05:
+            theirs[int(rng.integers(0, len(theirs))), int(rng.integers(0, 2))] = rng.choice(
+                [np.nan, np.inf]
+            )
+        me = theirs[int(rng.integers(0, len(theirs)))] + rng.choice(edge) * np.array([1.0, 0.0])
+        want = before(mine, theirs, me, gap)
+        assert _conflict(mine, theirs, me, gap) == want
+        checked.add(want)
+    assert checked == {(False, False), (False, True), (True, False), (True, True)}
+
+
 def test_aside_clearance_filter_equals_numpy() -> None:
     from firefleet.control.navigation._makeway import clear_of as _clear_of
 

@@ -50,6 +50,7 @@ __all__ = [
     "cone_coverage",
     "in_view",
     "line_of_sight",
+    "lines_of_sight",
     "viewpoints",
 ]
 
@@ -281,6 +282,23 @@ def cone_coverage(
     rel = np.linspace(-0.5 * hfov_rad, 0.5 * hfov_rad, n_rays)
     ang = pose[:, 2:3] + rel[None]  # (N, R)
     dist = np.arange(1, math.floor(range_m / step) + 1) * step  # (S,)
+    if np.isfinite(pose).all():  # the samples below in one compiled pass (_cone_kernel)
+        margin = 0.5 * cm.cell_m
+        view = in_view(
+            dist[None, :], rel[:, None], range_m, hfov_rad, near_m, half_width_m + margin
+        )
+        size = ang.size * dist.size
+        out_r, out_c = np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64)
+        ox, oy = (float(v) for v in cm.grid.origin_m)
+        hc, wc = cm.shape
+        grid = cm.grid
+        k = _cone_kernel(
+            np.ascontiguousarray(pose[:, 0]), np.ascontiguousarray(pose[:, 1]), np.cos(ang),
+            np.sin(ang), np.asarray(dist, dtype=np.float64), view, ox, oy,
+            float(grid.resolution_m), int(grid.shape[0]), int(grid.shape[1]), int(cm.factor),
+            hc, wc, cm.opaque, float(cm.cell_m), out_r, out_c,
+        )  # fmt: skip
+        return out_r[:k], out_c[:k]
     x = pose[:, 0, None, None] + dist * np.cos(ang)[..., None]  # (N, R, S)
     y = pose[:, 1, None, None] + dist * np.sin(ang)[..., None]
     xy = np.stack([x, y], axis=-1)
@@ -312,14 +330,113 @@ def line_of_sight(cm: CoarseMap, a_m: FloatArray, b_m: FloatArray) -> BoolArray:
     seg = np.hypot(*(b - a).T)
     n = max(2, math.ceil(float(seg.max()) / (0.5 * cm.cell_m)) + 1)
     s = np.linspace(0.0, 1.0, n)
-    ox, oy = (float(v) for v in cm.grid.origin_m)
     out = np.empty(len(a), dtype=bool)
+    _sight(cm, a, b, s, np.zeros(len(a), np.int64), np.full(len(a), n, np.int64), seg, out)
+    return out
+
+
+def lines_of_sight(
+    cm: CoarseMap, a_m: FloatArray, b_m: FloatArray, group: IntArray, n_groups: int
+) -> BoolArray:
+    """:func:`line_of_sight` of each group of the pairs ``a``, ``b`` (M, 2) [m] on its own,
+    in one pass: pair ``m`` belongs to group ``group[m]`` (``0 <= group < n_groups``), and
+    each group's lines are sampled as one call with only its pairs samples them (the
+    samples' count follows the group's longest line), so the answers are those calls'.
+    """
+    a = np.asarray(a_m, dtype=float).reshape(-1, 2)
+    b = np.asarray(b_m, dtype=float).reshape(-1, 2)
+    g = np.asarray(group, dtype=np.int64).reshape(-1)
+    if len(a) == 0:
+        return np.zeros(0, dtype=bool)
+    seg = np.hypot(*(b - a).T)
+    longest = np.full(n_groups, -math.inf)
+    np.maximum.at(longest, g, seg)
+    # each group's sample count, as line_of_sight counts it from its longest line
+    counts = [
+        max(2, math.ceil(float(x) / (0.5 * cm.cell_m)) + 1) if x != -math.inf else 0
+        for x in longest.tolist()  # NaN: ceil raises, as in line_of_sight
+    ]
+    tables: dict[int, int] = {}  # sample count -> its table's start in ``s``
+    parts: list[FloatArray] = []
+    size = 0
+    for n in counts:
+        if n and n not in tables:
+            tables[n] = size
+            parts.append(np.linspace(0.0, 1.0, n))
+            size += n
+    s = np.concatenate(parts)
+    lo = np.array([tables.get(n, 0) for n in counts], dtype=np.int64)[g]
+    count = np.array(counts, dtype=np.int64)[g]
+    out = np.empty(len(a), dtype=bool)
+    _sight(cm, a, b, s, lo, count, seg, out)
+    return out
+
+
+def _sight(
+    cm: CoarseMap,
+    a: FloatArray,
+    b: FloatArray,
+    s: FloatArray,
+    lo: IntArray,
+    count: IntArray,
+    seg: FloatArray,
+    out: BoolArray,
+) -> None:
+    """Run :func:`_sight_kernel` on the map's numbers."""
+    ox, oy = (float(v) for v in cm.grid.origin_m)
     _sight_kernel(
-        np.ascontiguousarray(a), np.ascontiguousarray(b), s, seg, ox, oy,
+        np.ascontiguousarray(a), np.ascontiguousarray(b), s, lo, count, seg, ox, oy,
         float(cm.grid.resolution_m), int(cm.grid.shape[0]), int(cm.factor), cm.opaque,
         float(cm.cell_m), out,
     )  # fmt: skip
-    return out
+
+
+@numba.njit(cache=True)
+def _cone_kernel(
+    px: FloatArray,
+    py: FloatArray,
+    cos_a: FloatArray,
+    sin_a: FloatArray,
+    dist: FloatArray,
+    view: BoolArray,
+    ox: float,
+    oy: float,
+    res: float,
+    rows: int,
+    cols: int,
+    factor: int,
+    hc: int,
+    wc: int,
+    opaque: BoolArray,
+    cell_m: float,
+    out_r: IntArray,
+    out_c: IntArray,
+) -> int:  # pragma: no cover - compiled
+    """:func:`cone_coverage`'s samples of finite poses in one pass, each the array
+    expressions' arithmetic (``x + d cos``, :meth:`OccupancyGrid.contains`,
+    :meth:`CoarseMap.cell_of`): the covered cells into ``out_r``, ``out_c`` in the
+    array form's order (robot, ray, sample); how many."""
+    k = 0
+    for n in range(cos_a.shape[0]):
+        for r in range(cos_a.shape[1]):
+            ca = cos_a[n, r]
+            sa = sin_a[n, r]
+            before = False  # an opaque sample before this one on the ray
+            for s in range(dist.size):
+                x = px[n] + dist[s] * ca
+                y = py[n] + dist[s] * sa
+                col = math.floor((x - ox) / res)
+                row = rows - 1 - math.floor((y - oy) / res)
+                on = row >= 0 and row < rows and col >= 0 and col < cols
+                cr = min(max(row // factor, 0), hc - 1)
+                cc = min(max(col // factor, 0), wc - 1)
+                if on and not before and view[r, s]:
+                    out_r[k] = cr
+                    out_c[k] = cc
+                    k += 1
+                if dist[s] >= cell_m and (not on or opaque[cr, cc]):
+                    before = True
+    return k
 
 
 @numba.njit(cache=True)
@@ -348,6 +465,8 @@ def _sight_kernel(
     a: FloatArray,
     b: FloatArray,
     s: FloatArray,
+    lo: IntArray,
+    count: IntArray,
     seg: FloatArray,
     ox: float,
     oy: float,
@@ -360,13 +479,15 @@ def _sight_kernel(
 ) -> None:  # pragma: no cover - compiled
     """:func:`line_of_sight`'s samples in one compiled pass, each the array expressions'
     arithmetic (``a + s (b - a)``, :meth:`CoarseMap.cell_of`: the map's cell floored by
-    ``factor``, clipped), a line stopping at its first opaque sample off the ends."""
+    ``factor``, clipped), a line stopping at its first opaque sample off the ends; pair
+    ``m``'s samples are ``s[lo[m] : lo[m] + count[m]]``."""
     hc, wc = opaque.shape
     for m in range(a.shape[0]):
         dx = b[m, 0] - a[m, 0]
         dy = b[m, 1] - a[m, 1]
         clear = True
-        for j in range(s.size):
+        for jj in range(count[m]):
+            j = lo[m] + jj
             along = s[j] * seg[m]
             if along < cell_m or along > seg[m] - cell_m:
                 continue  # the cells by either end are not checked

@@ -29,6 +29,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap
+from firefleet.control.mission._near import any_within
 from firefleet.control.mission._params import TacticsParams
 from firefleet.control.mission._views import ViewTable, choose_views, scan_heading, view_table
 
@@ -59,9 +60,8 @@ def _blocked_nodes(cm: CoarseMap, xy_m: FloatArray, radius_m: float) -> IntArray
     hc, wc = cm.shape
     rc = rc[(rc[:, 0] >= 0) & (rc[:, 0] < hc) & (rc[:, 1] >= 0) & (rc[:, 1] < wc)]
     centre = cm.centre_xy(rc)
-    near = np.zeros(len(rc), dtype=bool)
-    for p in xy_m:
-        near |= np.hypot(centre[:, 0] - p[0], centre[:, 1] - p[1]) <= radius_m
+    # hypot <= radius_m to any point, decided exactly (_near: a k-d tree, hypot at the edge)
+    near = any_within(centre, xy_m, radius_m, inclusive=True)
     out: IntArray = np.unique(rc[near, 0] * wc + rc[near, 1])
     return out
 
@@ -96,7 +96,9 @@ def _travel(
         if len(blocked):
             data = graph.data.copy()
             # no edge leaves a blocked node: reached, never passed through
-            rows = np.concatenate([np.arange(ptr[b], ptr[b + 1]) for b in blocked])
+            # (the edges of each blocked node in turn: its run ptr[b]:ptr[b + 1])
+            first, many = ptr[blocked], ptr[blocked + 1] - ptr[blocked]
+            rows = np.repeat(first - (np.cumsum(many) - many), many) + np.arange(many.sum())
             data[rows] = np.inf
             g = scipy.sparse.csr_matrix((data, graph.indices, ptr), shape=graph.shape)
         d = dijkstra(g, directed=True, indices=int(nodes[j]), limit=limit_m)

@@ -4,11 +4,11 @@ slots with a shot at the fire (:mod:`._ring`)."""
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import scipy.ndimage as ndi
 
+from firefleet._frozen import replace
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap
 from firefleet.control.mission._discs import disc_cells

@@ -22,10 +22,9 @@ damaged).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
+from firefleet._frozen import replace
 from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.mission._discs import disc_cells
 from firefleet.control.mission._hot import live_hot

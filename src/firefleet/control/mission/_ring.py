@@ -26,9 +26,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from firefleet._typing import BoolArray, FloatArray
+from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.formation import circle_attraction, ring_spacing
-from firefleet.control.mission._coverage import CoarseMap, line_of_sight
+from firefleet.control.mission._coverage import CoarseMap, line_of_sight, lines_of_sight
 from firefleet.control.navigation import Costmap
 from firefleet.planning.allocation import allocate_tasks
 
@@ -94,11 +94,21 @@ def regular_ring(
 
 
 def has_shot(
-    cm: CoarseMap, pts: FloatArray, spots: FloatArray, near_m: float, reach_m: float
+    cm: CoarseMap,
+    pts: FloatArray,
+    spots: FloatArray,
+    near_m: float,
+    reach_m: float,
+    blocks: tuple[IntArray, int] | None = None,
 ) -> BoolArray:
     """Whether a nozzle at each point (P, 2) has a burning spot (S, 2) at a distance in
     ``[near_m, reach_m]`` in line of sight [m]: a shot at the fire, from no closer than
-    is safe."""
+    is safe.
+
+    ``blocks`` ``(block, n_blocks)``: the points are blocks of separate calls (point
+    ``p`` of block ``block[p]``), each answered as a call with only its points
+    (:func:`~firefleet.control.mission._coverage.lines_of_sight`).
+    """
     p = np.asarray(pts, dtype=float).reshape(-1, 2)
     s = np.asarray(spots, dtype=float).reshape(-1, 2)
     out = np.zeros(len(p), dtype=bool)
@@ -107,7 +117,10 @@ def has_shot(
     d = np.hypot(p[:, None, 0] - s[None, :, 0], p[:, None, 1] - s[None, :, 1])
     pi, si = np.nonzero((d >= near_m) & (d <= reach_m))
     if len(pi):
-        ok = line_of_sight(cm, p[pi], s[si])
+        if blocks is None:
+            ok = line_of_sight(cm, p[pi], s[si])
+        else:
+            ok = lines_of_sight(cm, p[pi], s[si], blocks[0][pi], blocks[1])
         out[pi[ok]] = True
     return out
 
@@ -132,10 +145,12 @@ def _valid(
     avoid: FloatArray,
     avoid_m: float,
     clear: FloatArray,
+    blocks: tuple[IntArray, int] | None = None,
 ) -> BoolArray:
     """Slots a robot may stand on (open, ``near_m`` from every spot and every point of
     ``clear``, ``avoid_m`` from every hot place), can get to (``reachable``, on the map
-    grid) and spray the fire from (:func:`has_shot`)."""
+    grid) and spray the fire from (:func:`has_shot`; ``blocks`` as there: every test
+    but the shot's is the point's own)."""
     grid = costmap.grid
     inside = grid.contains(pts)
     rc = grid.cell_of(pts)
@@ -144,7 +159,7 @@ def _valid(
     open_ = inside & ~costmap.blocked[r, c] & reachable[r, c]
     open_ &= _clear(pts, spots, near_m) & _clear(pts, clear, near_m)
     open_ &= _clear(pts, avoid, avoid_m)
-    out: BoolArray = open_ & has_shot(cm, pts, spots, near_m, shot_m)
+    out: BoolArray = open_ & has_shot(cm, pts, spots, near_m, shot_m, blocks)
     return out
 
 
@@ -276,12 +291,19 @@ def ring_slots(
     best, best_score = ring, -1.0
     step = math.radians(5.0)
     period = 2 * math.pi / m
+    turns = []
     for k in range(max(1, round(period / step))):
         delta = k * step
         delta = delta if delta <= period / 2 else delta - period
         ang = base + delta
-        pts = c + radius_m * np.stack([np.cos(ang), np.sin(ang)], axis=1)
-        score = valid(pts).sum() - abs(delta) * 1e-3
+        turns.append((delta, c + radius_m * np.stack([np.cos(ang), np.sin(ang)], axis=1)))
+    # every turn's slots tested in one pass, each turn as a call of its own (_valid)
+    ok = _valid(
+        cm, costmap, reach, spots, near_m, shot_m, np.concatenate([p for _, p in turns]),
+        avoid, avoid_m, clear, (np.repeat(np.arange(len(turns)), m), len(turns)),
+    ).reshape(len(turns), m)  # fmt: skip
+    for (delta, pts), ok_k in zip(turns, ok, strict=True):
+        score = ok_k.sum() - abs(delta) * 1e-3
         if score > best_score:
             best, best_score = pts, score
     slots = best.copy()

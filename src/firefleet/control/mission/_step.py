@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import scipy.ndimage as ndi
 
+from firefleet._frozen import replace
 from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.mission._coverage import (
     CoarseMap,

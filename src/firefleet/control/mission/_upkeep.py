@@ -11,10 +11,10 @@ up), :func:`refill_wait` (refillers wait clear of a refill spot the fire reaches
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
+from firefleet._frozen import replace
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._fight import dry_flames
 from firefleet.control.mission._hot import live_hot, mark_hot, retreat_point

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from firefleet._typing import BoolArray, FloatArray, IntArray
@@ -277,18 +278,21 @@ def front_aim(
     h, w = cm.shape
     n = math.ceil(reach_m / cm.cell_m) + 1
     r0, c0 = (int(v) for v in cm.cell_of(np.asarray(pose[:2], dtype=float)))
-    rr, cc = np.mgrid[max(r0 - n, 0) : min(r0 + n + 1, h), max(c0 - n, 0) : min(c0 + n + 1, w)]
-    rows, cols = rr.ravel(), cc.ravel()
-    keep = cm.floor[rows, cols]
-    if wet_l_m2.shape == cm.shape:
-        keep &= wet_l_m2[rows, cols] < soak_l_m2
-    rows, cols = rows[keep], cols[keep]
-    xy = cm.centre_xy(np.stack([rows, cols], axis=-1))
-    rel = xy - pose[:2]
-    dist = np.hypot(rel[:, 0], rel[:, 1])
-    near = np.hypot(xy[:, None, 0] - f[None, :, 0], xy[:, None, 1] - f[None, :, 1]) <= front_m
-    sel = (dist <= reach_m) & (dist >= cm.cell_m) & near.any(axis=1)
-    xy, near = xy[sel], near[sel]
+    # the window's dry floor cells in reach with a flame within front_m (_front_cells)
+    r_lo, r_hi, c_lo, c_hi = max(r0 - n, 0), min(r0 + n + 1, h), max(c0 - n, 0), min(c0 + n + 1, w)
+    size = max(r_hi - r_lo, 0) * max(c_hi - c_lo, 0)
+    xy = np.empty((size, 2))
+    near = np.empty((size, len(f)), dtype=bool)
+    has_wet = wet_l_m2.shape == cm.shape
+    grid = cm.grid
+    k = _front_cells(
+        float(pose[0]), float(pose[1]), r_lo, r_hi, c_lo, c_hi, cm.floor,
+        wet_l_m2 if has_wet else np.zeros((1, 1)), has_wet, soak_l_m2,
+        np.ascontiguousarray(f), front_m, reach_m, float(cm.cell_m), float(grid.origin_m[0]),
+        float(grid.origin_m[1]), float(grid.resolution_m), int(grid.shape[0]), int(cm.factor),
+        xy, near,
+    )  # fmt: skip
+    xy, near = xy[:k], near[:k]
     if len(xy) == 0:
         return None
     ok = line_of_sight(cm, np.repeat(pose[None, :2], len(xy), 0), xy)
@@ -302,3 +306,57 @@ def front_aim(
     served = ((inside @ near.astype(np.float64)) > 0.0).sum(axis=1)  # flames whose front
     out: FloatArray = xy[int(np.argmax(served * (len(xy) + 1) + held))]
     return out
+
+
+@numba.njit(cache=True)
+def _front_cells(
+    px: float,
+    py: float,
+    r_lo: int,
+    r_hi: int,
+    c_lo: int,
+    c_hi: int,
+    floor: BoolArray,
+    wet: FloatArray,
+    has_wet: bool,
+    soak_l_m2: float,
+    flames: FloatArray,
+    front_m: float,
+    reach_m: float,
+    cell_m: float,
+    ox: float,
+    oy: float,
+    res: float,
+    rows: int,
+    factor: int,
+    out_xy: FloatArray,
+    out_near: BoolArray,
+) -> int:  # pragma: no cover - compiled
+    """:func:`front_aim`'s candidate cells in one pass, the array form's arithmetic
+    (:meth:`CoarseMap.centre_xy`, ``np.hypot``) in its order (row-major): the floor
+    cells of rows ``[r_lo, r_hi)`` and columns ``[c_lo, c_hi)`` not soaked (``has_wet``),
+    within ``reach_m`` of the nozzle (``px``, ``py``) and no nearer than ``cell_m``,
+    with a flame within ``front_m``: their centres into ``out_xy``, which flames into
+    ``out_near``; how many."""
+    k = 0
+    for r in range(r_lo, r_hi):
+        for c in range(c_lo, c_hi):
+            if not floor[r, c] or (has_wet and not wet[r, c] < soak_l_m2):
+                continue
+            fr = (np.float64(r) + 0.5) * factor - 0.5
+            fc = (np.float64(c) + 0.5) * factor - 0.5
+            x = ox + (fc + 0.5) * res
+            y = oy + (np.float64(rows - 1) - fr + 0.5) * res
+            dist = np.hypot(x - px, y - py)
+            if not (dist <= reach_m and dist >= cell_m):
+                continue
+            anyf = False
+            for j in range(flames.shape[0]):
+                hit = np.hypot(x - flames[j, 0], y - flames[j, 1]) <= front_m
+                out_near[k, j] = hit
+                anyf = anyf or hit
+            if anyf:
+                out_xy[k, 0] = x
+                out_xy[k, 1] = y
+                k += 1
+    return k

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numba
 import numpy as np
 
+from firefleet._frozen import replace
 from firefleet._typing import FloatArray
 from firefleet.control.navigation._astar import adopt_plans
 from firefleet.control.navigation._dwa import dwa_command
@@ -98,15 +98,28 @@ def _conflict(
 ) -> tuple[bool, bool]:  # pragma: no cover - compiled
     """(my path ahead meets theirs, I stand in their way): whether any of my points
     (K, 2) lies within ``gap_m`` of any of theirs (L, 2), and whether any of theirs lies
-    within ``gap_m`` of me."""
+    within ``gap_m`` of me.
+
+    A pair whose ``|dx|`` or ``|dy|`` is ``gap_m`` or more is not near: ``hypot``
+    returns at least ``max(|dx|, |dy|)`` (its result is within an ulp of the exact
+    value, which is at least that float), so the test skips its ``hypot``; the same
+    answers (NaN differences still go to ``hypot``)."""
     in_way = False
     for j in range(theirs.shape[0]):
-        if np.hypot(theirs[j, 0] - me[0], theirs[j, 1] - me[1]) < gap_m:
+        dx = theirs[j, 0] - me[0]
+        dy = theirs[j, 1] - me[1]
+        if abs(dx) >= gap_m or abs(dy) >= gap_m:
+            continue
+        if np.hypot(dx, dy) < gap_m:
             in_way = True
             break
     for i in range(mine.shape[0]):
         for j in range(theirs.shape[0]):
-            if np.hypot(mine[i, 0] - theirs[j, 0], mine[i, 1] - theirs[j, 1]) < gap_m:
+            dx = mine[i, 0] - theirs[j, 0]
+            dy = mine[i, 1] - theirs[j, 1]
+            if abs(dx) >= gap_m or abs(dy) >= gap_m:
+                continue
+            if np.hypot(dx, dy) < gap_m:
                 return True, in_way
     return False, in_way
 

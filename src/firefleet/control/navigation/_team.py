@@ -40,13 +40,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from firefleet._frozen import replace
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.navigation._astar import astar
 from firefleet.control.navigation._costmap import Costmap, build_costmap
@@ -309,18 +311,16 @@ def _with_teammates(
     reach = params.robot_radius_m + params.inflation_m + 20.0 * params.wall_decay_m
     k = math.ceil(reach / res) + 1
     windows = []
+    ox, oy = (float(v) for v in grid.origin_m)
+    box = np.zeros(4, dtype=np.int64)
+    disc = np.zeros((2 * k + 1, 2 * k + 1), dtype=bool)
     for xy in np.asarray(others_xy, dtype=float).reshape(-1, 2):
-        r, c = (int(v) for v in grid.cell_of(xy))
-        r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
-        if r0 >= r1 or c0 >= c1:
-            continue  # off the map
-        rr, cc = np.mgrid[r0:r1, c0:c1]
-        centres = grid.center_of(np.stack([rr, cc], axis=-1))
-        disc = np.hypot(centres[..., 0] - xy[0], centres[..., 1] - xy[1]) <= params.robot_radius_m
-        if not disc.any():
-            continue
-        occ[r0:r1, c0:c1] |= disc
-        near = np.asarray(ndimage.distance_transform_edt(~disc)) * res
+        # the window about its cell and the disc's cells in it (compiled, _disc_window)
+        if not _disc_window(xy, ox, oy, res, h, w, k, params.robot_radius_m, box, disc):
+            continue  # off the map, or no cell centre in its disc
+        r0, r1, c0, c1 = (int(v) for v in box)
+        occ[r0:r1, c0:c1] |= disc[: r1 - r0, : c1 - c0]
+        near = np.asarray(ndimage.distance_transform_edt(~disc[: r1 - r0, : c1 - c0])) * res
         np.minimum(clearance[r0:r1, c0:c1], near, out=clearance[r0:r1, c0:c1])
         windows.append((r0, r1, c0, c1))
     blocked = clearance <= params.inflation_m
@@ -340,6 +340,47 @@ def _with_teammates(
     for arr in (clearance, blocked, cost):
         arr.setflags(write=False)
     return Costmap(teamed, clearance, blocked, cost, float(params.inflation_m))
+
+
+@numba.njit(cache=True)
+def _disc_window(
+    xy: FloatArray,
+    ox: float,
+    oy: float,
+    res: float,
+    h: int,
+    w: int,
+    k: int,
+    radius_m: float,
+    box: IntArray,
+    disc: BoolArray,
+) -> bool:  # pragma: no cover - compiled
+    """A teammate's window in :func:`_with_teammates`: ``box`` gets the rows and
+    columns ``[r0, r1) x [c0, c1)`` within ``k`` cells of the cell holding ``xy`` (2,)
+    [m] (:meth:`OccupancyGrid.cell_of`'s arithmetic), ``disc[: r1 - r0, : c1 - c0]``
+    the window's cells whose centre (:meth:`OccupancyGrid.center_of`'s) lies within
+    ``radius_m`` of it (``np.hypot``); whether the window is on the map and holds one.
+    A centre farther than ``radius_m`` along x or y is out without its ``hypot`` (which
+    is at least that difference)."""
+    c = math.floor((xy[0] - ox) / res)
+    r = h - 1 - math.floor((xy[1] - oy) / res)
+    r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
+    if r0 >= r1 or c0 >= c1:
+        return False  # off the map
+    box[0], box[1], box[2], box[3] = r0, r1, c0, c1
+    found = False
+    for i in range(r1 - r0):
+        cy = oy + (np.float64(h - 1) - np.float64(r0 + i) + 0.5) * res
+        dy = cy - xy[1]
+        for j in range(c1 - c0):
+            cx = ox + (np.float64(c0 + j) + 0.5) * res
+            dx = cx - xy[0]
+            inside = False
+            if abs(dx) <= radius_m and abs(dy) <= radius_m:
+                inside = bool(np.hypot(dx, dy) <= radius_m)
+            disc[i, j] = inside
+            found = found or inside
+    return found
 
 
 def _wall_extra(clearance_m: FloatArray, params: NavigationParams) -> FloatArray:
