@@ -423,52 +423,6 @@ def test_a_fighter_stopped_on_its_way_turns_to_its_fire(monkeypatch: pytest.Monk
     assert abs(o.omega_rad_s[0]) > 0.5
 
 
-@pytest.mark.parametrize("wall", [True, False], ids=["behind_a_wall", "in_sight"])
-def test_a_fighter_at_its_place_with_its_fire_out_of_sight_looks_round(
-    monkeypatch: pytest.MonkeyPatch, wall: bool
-) -> None:
-    """A fighter standing at its place (the navigation says arrived) with no flame in
-    its jet's reach: with every spot of its fire behind a wall it turns at
-    scan_omega_rad_s (its camera sweeps the floor about it); with a spot in sight it
-    faces the fire at face_gain times the bearing error, as before."""
-    from firefleet.control.navigation import navigation_step
-
-    occ = room().occupied.copy()
-    if wall:
-        occ[40:, 80:84] = True  # x = 4.0-4.2 m, y 0-8 m: the way round by the north
-    grid = OccupancyGrid(occ, ~occ, 0.05, name="room")
-    p = TacticsParams(
-        soak_l_m2=NEVER, nav=FAST_NAV, fire_robots_min=1, fire_robots_max=1, explore_frac=0.0
-    )
-    world = World(grid, p, np.array([[2.0, 3.0, 0.5]]))
-    k = replace(
-        world.state.knowledge,
-        spot_xy_m=np.array([[6.0, 3.0]]),  # 4 m east: beyond the jet's reach
-        spot_fire=np.array([0]),
-        spot_flame=np.array([True]),
-        spot_misses=np.array([0]),
-    )
-    world.state = replace(world.state, knowledge=k, pending=True)
-    real = navigation_step
-
-    def arrived(nav, inputs, params, period_s):  # type: ignore[no-untyped-def]
-        nav, v, w = real(nav, inputs, params, period_s)
-        return replace(nav, status=("arrived",)), np.zeros_like(v), np.zeros_like(w)
-
-    monkeypatch.setattr("firefleet.control.mission._step.navigation_step", arrived)
-    world.step()
-    o = world.orders
-    assert o is not None
-    assert o.mode[0] == FIGHT
-    assert o.v_m_s[0] == 0.0
-    if wall:
-        assert o.omega_rad_s[0] == p.scan_omega_rad_s
-    else:
-        err = -0.5  # the fire due east, the robot heading 0.5 rad
-        w_max = p.nav.dwa.omega_max_rad_s
-        assert o.omega_rad_s[0] == pytest.approx(np.clip(p.face_gain * err, -w_max, w_max))
-
-
 def test_fighters_wet_the_front_and_the_fuel_beyond_it_not_the_same_cells() -> None:
     """A fire that never goes out (the harness's point), 40 s of one fighter: with the
     ledger it aims at the dry cells within front_m of the flames, so its water soaks

@@ -12,7 +12,6 @@ from firefleet._typing import BoolArray, FloatArray
 from firefleet.control.mission._coverage import (
     CoarseMap,
     cone_coverage,
-    line_of_sight,
     viewpoints,
 )
 from firefleet.control.mission._explore import explore_views, scan_turn
@@ -27,12 +26,7 @@ from firefleet.control.mission._fight import (
 )
 from firefleet.control.mission._hot import probe_estimate
 from firefleet.control.mission._keepout import heat_costmap
-from firefleet.control.mission._knowledge import (
-    Knowledge,
-    fires_of,
-    update_knowledge,
-    watch_victims,
-)
+from firefleet.control.mission._knowledge import fires_of, update_knowledge, watch_victims
 from firefleet.control.mission._params import (
     CONFIRM,
     DAMAGED,
@@ -217,14 +211,6 @@ def _plan(
     return retarget(new, goals, pose)
 
 
-def _sees_fire(cm: CoarseMap, pose: FloatArray, k: Knowledge, fire: int) -> bool:
-    """Whether any spot of the fire is in line of sight from the pose (3,)."""
-    spots = k.spot_xy_m[k.spot_fire == fire]
-    if len(spots) == 0:
-        return True
-    return bool(line_of_sight(cm, np.repeat(pose[None, :2], len(spots), axis=0), spots).any())
-
-
 def _orders(
     state: TacticsState, obs: TacticsObservation, pose: FloatArray, params: TacticsParams
 ) -> TacticsState:
@@ -310,14 +296,6 @@ def _orders(
         if at_goal[i] or settle[i]:
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
-            if aim is None and not _sees_fire(state.coarse, pose[i], k, state.task_fire[i]):
-                # no spot of its fire in sight from where it stands: it looks round (the
-                # cells its camera sweeps become known clear, so the next plan may find
-                # a slot with a shot there, and spots in view that burn no more are
-                # looked out); facing the fire through a wall showed it nothing (the
-                # maze, seed 2: the fire out at 137 s, its last spots behind a wall,
-                # two fighters stood facing the wall to the end)
-                w[i] = params.scan_omega_rad_s
         elif v[i] == 0.0 and w[i] == 0.0 and not aside[i]:
             # stopped on its way (waiting for a teammate, or no safe move): it turns to
             # its fire in place, so that its camera keeps the fire in view (the maze,
