@@ -386,7 +386,9 @@ def _orders(
         # 2.6 L, drove from its slot onto a burning cell between a classroom's desks and
         # was damaged: a school wing, seed 1)
         before = v.copy()
-        v, w = flame_guard(v, w, pose, flames, params.flame_guard_m, math.radians(60.0), w_max)
+        v, w = flame_guard(
+            v, w, pose, flames, params.flame_guard_m, math.radians(60.0), w_max, state.coarse
+        )
         # one held with water sprays its way on (``fight_through``), a refiller too
         # (exempt before: on mission-office seed 1 two were held in the fire's room by
         # the flames at its door)
