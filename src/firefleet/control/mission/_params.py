@@ -202,7 +202,7 @@ class TacticsParams:
         never (:func:`._knowledge.update_knowledge`). Spots nobody can get in view
         otherwise bar the way for good: the maze, seed 2, its fire out at 138 s and
         its last spots behind a wall, no person found in 900 s; forgotten after 120 s,
-        both found (503 and 555 s).
+        both found (450 and 536 s).
     """
 
     standoff_m: float = 1.5
