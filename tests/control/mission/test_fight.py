@@ -6,11 +6,16 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from firefleet.control.mission import MODES, TacticsParams, tactics_init
 from firefleet.control.mission._coverage import CoarseMap, coarse_map
 from firefleet.control.mission._fight import dry_flames
-from firefleet.control.mission._knowledge import behind_water, empty_knowledge
+from firefleet.control.mission._knowledge import (
+    behind_water,
+    empty_knowledge,
+    update_knowledge,
+)
 from firefleet.control.mission._water import spray_ledger
 from firefleet.control.navigation import build_costmap
 from firefleet.world import FireParams, OccupancyGrid, SprayParams, fire_init, spray_step
@@ -316,6 +321,106 @@ def test_a_flame_on_water_before_a_wall_moves_in_front_of_it() -> None:
     short = behind_water(wet, cm, pose, xy, robot, np.ones(3, bool), 1.3, front_m=0.25)
     assert short[0].tolist() == [5.6, 2.0]  # 0.25 m reaches no dry cell
     assert out[2].tolist() == [5.6, 2.0]  # its camera 0.3 m off: a step short of it only
+
+
+def test_flames_seen_on_soaked_floor_dry_the_ledger_there() -> None:
+    """A flame detection on a cell the ledger holds soaked, with only soaked cells
+    within behind_water's walk (the camera 0.3 m off, a wall behind): the cameras
+    overrule the ledger, the cell is dry again and the flame one to aim at
+    (``dry_flames``); a flame moved to a dry cell, and hot gas, leave it as it was."""
+    _grid, cm = _open_cm()
+    wet = np.zeros(cm.shape)
+    wet[:, 21:24] = 2.0  # soaked from x = 5.25 m up to the wall at x = 6 m
+    p = TacticsParams()
+    k = replace(empty_knowledge(), wet_l_m2=wet)
+    pose = np.array([[4.0, 2.0, 0.0], [5.3, 2.0, 0.0]])
+    none = np.zeros((0, 2))
+    no_robot = np.zeros(0, dtype=np.int64)
+    looked = np.zeros(2, dtype=bool)
+
+    def seen(xy: list[float], robot: int, peak_c: float) -> np.ndarray:
+        k2, _ = update_knowledge(
+            k,
+            cm,
+            pose,
+            np.array([xy]),
+            np.array([robot]),
+            none,
+            no_robot,
+            looked,
+            10.0,
+            p,
+            fire_peak_c=np.array([peak_c]),
+        )
+        assert len(k2.spot_xy_m) == 1
+        out: np.ndarray = k2.wet_l_m2
+        return out
+
+    rc = tuple(int(v) for v in cm.cell_of(np.array([[5.6, 2.0]]))[0])
+    assert wet[rc] == 2.0
+    ledger = seen([5.6, 2.0], 1, 800.0)  # from 0.3 m: no dry cell on its ray
+    assert ledger[rc] == 0.0
+    assert np.count_nonzero(ledger != wet) == 1
+    ledger = seen([5.6, 2.0], 0, 800.0)  # from 1.6 m: moved to the dry cell in front
+    np.testing.assert_array_equal(ledger, wet)
+    ledger = seen([5.6, 2.0], 1, 300.0)  # hot gas, not flames
+    np.testing.assert_array_equal(ledger, wet)
+    # the flame on the dried cell is one to aim at
+    k3, _ = update_knowledge(
+        k,
+        cm,
+        pose,
+        np.array([[5.6, 2.0]]),
+        np.array([1]),
+        none,
+        no_robot,
+        looked,
+        10.0,
+        p,
+        fire_peak_c=np.array([800.0]),
+    )
+    state = replace(tactics_init(_grid, pose, p), knowledge=k3)
+    assert dry_flames(state, p).tolist() == [[5.6, 2.0]]
+
+
+def test_a_fighter_stopped_on_its_way_turns_to_its_fire(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A fighter the navigation holds still (v = omega = 0: waiting for a teammate, or
+    no safe move) short of its slot turns in place towards its fire at face_gain times
+    the bearing error (clipped), so that its camera keeps the fire in view; it turned
+    nowhere before (the maze, seed 0: two fighters faced the passage's walls for 400 s)."""
+    from firefleet.control.navigation import navigation_step
+
+    p = TacticsParams(
+        soak_l_m2=NEVER,
+        nav=FAST_NAV,
+        fire_robots_min=1,
+        fire_robots_max=1,
+        explore_frac=0.0,
+        sensing_range_m=6.0,
+    )
+    world = World(room(), p, np.array([[1.5, 5.0, 0.0]]), fire_xy=FIRE, water_l=NEVER)
+    world.run(20.0, until=lambda w: w.orders is not None and w.orders.mode[0] == FIGHT)
+    assert world.orders is not None
+    assert world.orders.mode[0] == FIGHT
+    real = navigation_step
+
+    def held(nav, inputs, params, period_s):  # type: ignore[no-untyped-def]
+        nav, v, w = real(nav, inputs, params, period_s)
+        return replace(nav, status=("waiting",)), np.zeros_like(v), np.zeros_like(w)
+
+    monkeypatch.setattr("firefleet.control.mission._step.navigation_step", held)
+    world.pose[0, 2] = math.pi  # facing away from the fire, 4.5 m east of it
+    world.step()
+    o = world.orders
+    assert o is not None
+    assert o.mode[0] == FIGHT
+    assert o.v_m_s[0] == 0.0
+    fx, fy = world.state.knowledge.spot_xy_m.mean(axis=0)
+    x, y, th = world.log[-1]["pose"][0]
+    err = (math.atan2(fy - y, fx - x) - th + math.pi) % (2 * math.pi) - math.pi
+    w_max = p.nav.dwa.omega_max_rad_s
+    assert o.omega_rad_s[0] == pytest.approx(np.clip(p.face_gain * err, -w_max, w_max))
+    assert abs(o.omega_rad_s[0]) > 0.5
 
 
 def test_fighters_wet_the_front_and_the_fuel_beyond_it_not_the_same_cells() -> None:

@@ -388,3 +388,48 @@ def test_a_person_in_a_covered_cell_is_named_by_the_detector(pose: list[float]) 
     assert not _named(p[0], ahead)
     a_rc = cm.cell_of(ahead[None])[0]
     assert not np.any((rows == a_rc[0]) & (cols == a_rc[1]))
+
+
+def test_a_fire_no_detection_joined_for_fire_forget_s_is_forgotten() -> None:
+    """Two fires seen at 0 s, the first seen again at 100 s (a detection near one of
+    its spots), nothing looked at since (so no look puts them out): at 120 s both are
+    kept, at 120.1 s the second is gone with its spots, at 220.1 s the first too; a
+    fire seen anew after that is a new fire. With ``fire_forget_s = inf`` both stay."""
+    from dataclasses import replace
+
+    state = tactics_init(room(), [[1.0, 5.0, 0.0]], P)
+    away = np.array([[1.0, 9.0, math.pi / 2]])  # facing the wall: looks at neither
+    blind = np.zeros(1, dtype=bool)
+
+    def at(k: Knowledge, t_s: float, fires: ArrayLike, params: TacticsParams) -> Knowledge:
+        f = np.asarray(fires, float).reshape(-1, 2)
+        k2, _ = update_knowledge(
+            k, state.coarse, away, f, np.zeros(len(f), dtype=np.int64), NONE2, NONE,
+            blind, t_s, params,
+        )  # fmt: skip
+        return k2
+
+    for forget_s, gone in ((P.fire_forget_s, True), (math.inf, False)):
+        p = replace(P, fire_forget_s=forget_s)
+        k = at(empty_knowledge(), 0.0, [[4.0, 5.0], [4.8, 5.0], [9.0, 2.0]], p)
+        assert len(fires_of(k)[0]) == 2
+        k = at(k, 100.0, [[4.1, 5.1]], p)  # the first fire, seen again
+        k = at(k, 120.0, NONE2, p)
+        assert len(fires_of(k)[0]) == 2
+        k = at(k, 120.1, NONE2, p)
+        assert len(k.spot_xy_m) == (2 if gone else 3)
+        if gone:
+            assert np.allclose(fires_of(k)[1], [[4.4, 5.0]])  # the first fire's two spots
+        k = at(k, 220.1, NONE2, p)
+        assert len(fires_of(k)[0]) == (0 if gone else 2)
+        k = at(k, 300.0, [[9.0, 2.0]], p)
+        ids = fires_of(k)[0]
+        assert len(ids) == (1 if gone else 2)
+        if gone:
+            assert ids.tolist() == [2]  # a new id
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, math.nan])
+def test_fire_forget_s_must_be_positive(bad: float) -> None:
+    with pytest.raises(InputError, match=r"tactics\.fire_forget_s"):
+        TacticsParams(fire_forget_s=bad)

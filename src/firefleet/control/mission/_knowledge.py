@@ -86,6 +86,8 @@ class Knowledge:
         Unconfirmed victims a confirmer watched for ``confirm_watch_s`` without
         confirming: no robot is sent to them again (a detection from within the
         confirmation radius still confirms them).
+    fire_last_s : ndarray, shape (next_fire,) or (0,)
+        When a detection last joined each fire id [s] (``fire_forget_s``).
     """
 
     spot_xy_m: FloatArray
@@ -101,6 +103,7 @@ class Knowledge:
     wet_l_m2: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
     victim_watch_s: FloatArray = field(default_factory=lambda: np.zeros(0))
     victim_given_up: BoolArray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    fire_last_s: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def victim_confirmed(self) -> BoolArray:
@@ -307,6 +310,61 @@ def behind_water(
     return out
 
 
+def seen_burning(
+    k: Knowledge, cm: CoarseMap, flames_xy_m: FloatArray, soak_l_m2: float
+) -> Knowledge:
+    """The ledger told by the cameras: a flame seen on a cell the ledger holds soaked,
+    with no dry cell near it on its ray (:func:`behind_water`), burns: the water the
+    ledger put there did not reach it (a wall the coarse line of sight missed, a pose
+    off by a cell), so the cell is dry again (its water 0) and the fighters aim at it.
+
+    The maze, seed 0: at 200 s the team held all eight of its fire's flames soaked and
+    no fighter aimed, while the fire burned on cells the ledger held at 2.5 L/m^2 and
+    the world's water there was 0 (the coarse cone had passed a wall's corner); the fire
+    then burned along the only passage to both people.
+
+    Parameters
+    ----------
+    k : Knowledge
+    cm : CoarseMap
+    flames_xy_m : ndarray, shape (K, 2)
+        Where this tick's flame detections lie [m] (after :func:`behind_water`).
+    soak_l_m2 : float
+        Water per area that soaks a cell [L/m^2].
+
+    Returns
+    -------
+    Knowledge
+        ``k`` itself when no flame lies on a soaked cell; else with a new ledger.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dataclasses import replace
+    >>> from firefleet.control.mission._coverage import coarse_map
+    >>> from firefleet.control.navigation import build_costmap
+    >>> from firefleet.world import OccupancyGrid
+    >>> walls = np.zeros((8, 8), dtype=bool)
+    >>> cm = coarse_map(build_costmap(OccupancyGrid(walls, ~walls, resolution_m=0.25), 0.2), 0.25)
+    >>> k = replace(empty_knowledge(), wet_l_m2=np.full(cm.shape, 2.0))
+    >>> k2 = seen_burning(k, cm, np.array([[0.6, 0.6]]), 1.3)
+    >>> float(k2.wet_l_m2.sum()), float(k.wet_l_m2.sum())  # one cell dry again
+    (126.0, 128.0)
+    >>> seen_burning(k2, cm, np.zeros((0, 2)), 1.3) is k2
+    True
+    """
+    pts = np.asarray(flames_xy_m, dtype=float).reshape(-1, 2)
+    if len(pts) == 0 or k.wet_l_m2.shape != cm.shape:
+        return k
+    wet = soaked_at(k.wet_l_m2, cm, pts, soak_l_m2)
+    if not wet.any():
+        return k
+    rc = cm.cell_of(pts[wet])
+    ledger = k.wet_l_m2.copy()
+    ledger[rc[:, 0], rc[:, 1]] = 0.0
+    return replace(k, wet_l_m2=ledger)
+
+
 def seen_point(cm: CoarseMap, xy_m: FloatArray) -> FloatArray:
     """Where a camera looks to see each spot (M, 2) [m]: the spot itself, or, for one in
     an opaque coarse cell, the centre of the nearest cell that is not (the face of the
@@ -402,6 +460,7 @@ def update_knowledge(
     )
     if flames.any() and k.wet_l_m2.shape == cm.shape:
         fire_xy = behind_water(k.wet_l_m2, cm, pose, fire_xy, fire_robot, flames, params.soak_l_m2)
+        k = seen_burning(k, cm, fire_xy[flames], params.soak_l_m2)
     for p, f in zip(fire_xy, flames, strict=True):
         k, c = _add_fire(k, p, params.fire_merge_m, bool(f))
         changed |= c
@@ -446,7 +505,42 @@ def update_knowledge(
     if len(k.victim_xy_m) and looked.any():
         k, c = _victim_looks(k, cm, pose, person_xy, looked, params)
         changed |= c
+    if math.isfinite(params.fire_forget_s):
+        k, c = _forget_fires(k, fire_xy, t_s, params.fire_forget_s)
+        changed |= c
     return k, changed
+
+
+def _forget_fires(
+    k: Knowledge, fire_xy: FloatArray, t_s: float, forget_s: float
+) -> tuple[Knowledge, bool]:
+    """Each fire's last detection time updated by this tick's detections (each joins
+    the fire of its nearest spot; a new fire counts from now), and the fires no
+    detection joined for more than ``forget_s`` dropped with all their spots; True when
+    a fire was dropped."""
+    ids = max(k.next_fire, int(k.spot_fire.max()) + 1 if len(k.spot_fire) else 0)
+    last = np.full(ids, t_s)
+    n = min(len(k.fire_last_s), ids)
+    last[:n] = k.fire_last_s[:n]
+    if len(fire_xy) and len(k.spot_xy_m):
+        d = np.hypot(
+            k.spot_xy_m[:, None, 0] - fire_xy[None, :, 0],
+            k.spot_xy_m[:, None, 1] - fire_xy[None, :, 1],
+        )
+        last[np.unique(k.spot_fire[np.argmin(d, axis=0)])] = t_s
+    changed = False
+    if len(k.spot_xy_m):
+        keep = t_s - last[k.spot_fire] <= forget_s
+        if not keep.all():
+            changed = True
+            k = replace(
+                k,
+                spot_xy_m=k.spot_xy_m[keep],
+                spot_fire=k.spot_fire[keep],
+                spot_flame=k.spot_flame[keep],
+                spot_misses=k.spot_misses[keep],
+            )
+    return replace(k, fire_last_s=last), changed
 
 
 def _victim_looks(

@@ -196,6 +196,13 @@ class TacticsParams:
         Robots with nothing left to explore join a burning fire past
         ``fire_robots_max`` (:mod:`._spare`; default off until measured on every
         built-in).
+    fire_forget_s : float
+        A fire no detection has joined for this long is forgotten, all its spots (a
+        fire still burning is detected again when a camera comes by) [s]; ``inf``:
+        never (:func:`._knowledge.update_knowledge`). Spots nobody can get in view
+        otherwise bar the way for good: the maze, seed 2, its fire out at 138 s and
+        its last spots behind a wall, no person found in 900 s; forgotten after 120 s,
+        both found (450 and 536 s).
     """
 
     standoff_m: float = 1.5
@@ -265,6 +272,7 @@ class TacticsParams:
     hot_cost: float = 20.0
     # untuned2
     spare_fight: bool = False
+    fire_forget_s: float = 120.0
 
     def __post_init__(self) -> None:
         check_fields(
@@ -333,6 +341,8 @@ class TacticsParams:
         )
         # route
         check_fields(self, "tactics", non_negative=("hot_keepout_m", "hot_cost"))
+        if not self.fire_forget_s > 0.0:  # inf allowed: never
+            raise InputError(f"tactics.fire_forget_s must be > 0, got {self.fire_forget_s}")
         for name in (
             "confirm_repeats",
             "fire_out_looks",

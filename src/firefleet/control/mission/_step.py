@@ -296,6 +296,12 @@ def _orders(
         if at_goal[i] or settle[i]:
             v[i] = 0.0
             w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
+        elif v[i] == 0.0 and w[i] == 0.0 and not aside[i]:
+            # stopped on its way (waiting for a teammate, or no safe move): it turns to
+            # its fire in place, so that its camera keeps the fire in view (the maze,
+            # seed 0: two fighters stood 200-600 s facing the walls of the passage, and
+            # the fire burned on unseen behind flames the team held soaked)
+            w[i] = float(np.clip(params.face_gain * err, -w_max, w_max))
         if aim is not None and abs(err) <= half and obs.tank_l[i] > 0.0:
             # only a cone that holds dry cells at the flames (the ledger's)
             rows, cols = cone_cells(state.coarse, pose[i], params.spray_range_m, half)
@@ -380,7 +386,9 @@ def _orders(
         # 2.6 L, drove from its slot onto a burning cell between a classroom's desks and
         # was damaged: a school wing, seed 1)
         before = v.copy()
-        v, w = flame_guard(v, w, pose, flames, params.flame_guard_m, math.radians(60.0), w_max)
+        v, w = flame_guard(
+            v, w, pose, flames, params.flame_guard_m, math.radians(60.0), w_max, state.coarse
+        )
         # one held with water sprays its way on (``fight_through``), a refiller too
         # (exempt before: on mission-office seed 1 two were held in the fire's room by
         # the flames at its door)
