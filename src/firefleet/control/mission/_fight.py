@@ -478,11 +478,12 @@ def flame_guard(
     dy = f[None, :, 1] - pose[:, None, 1]
     off = (np.arctan2(dy, dx) - pose[:, None, 2] + np.pi) % (2 * np.pi) - np.pi
     ahead = (np.hypot(dx, dy) <= guard_m) & (np.abs(off) <= half_angle_rad)
-    if cm is not None:
-        for i in map(int, np.flatnonzero(ahead.any(axis=1) & (v > 0.0))):
+    for i in map(int, np.flatnonzero(ahead.any(axis=1) & (v > 0.0))):
+        if cm is not None:
             j = np.flatnonzero(ahead[i])
             ahead[i, j] = flames_in_sight(cm, pose[i, :2], f[j])
-    for i in map(int, np.flatnonzero(ahead.any(axis=1) & (v > 0.0))):
+            if not ahead[i].any():
+                continue
         v[i] = 0.0
         if abs(w[i]) < 0.2 * omega_max_rad_s:
             nearest = int(np.argmin(np.where(ahead[i], np.hypot(dx[i], dy[i]), np.inf)))
@@ -510,7 +511,10 @@ def flames_in_sight(cm: CoarseMap, xy_m: FloatArray, flames_xy_m: FloatArray) ->
     """
     f = np.asarray(flames_xy_m, dtype=float).reshape(-1, 2)
     a = np.broadcast_to(np.asarray(xy_m, dtype=float)[:2], f.shape)
-    out: BoolArray = clear_sight(cm, a, f) | clear_sight(cm, a, seen_point(cm, f))
+    out: BoolArray = clear_sight(cm, a, f)
+    face = seen_point(cm, f)
+    moved = np.flatnonzero((face != f).any(axis=1) & ~out)  # in a wall, not yet in sight
+    out[moved] = clear_sight(cm, a[moved], face[moved])
     return out
 
 
