@@ -10,6 +10,7 @@ import numba
 import numpy as np
 
 FloatArray = np.ndarray
+BoolArray = np.ndarray
 
 
 @numba.njit(cache=False)
@@ -72,6 +73,7 @@ def _dwa_one(
     n_steps: int,
     c_cap: float,
     c_weight: float,
+    turn: bool,
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
     half = axle / 2.0
     v_max = vw
@@ -104,6 +106,7 @@ def _dwa_one(
     fb_v = v_lo
     fb_w = w0
     fb_c = -np.inf
+    moving = False  # an admissible command with v > 0
     for iv in range(n_v + 1):
         if iv < n_v:
             v = v_lo + (v_hi - v_lo) * iv / (n_v - 1)
@@ -140,6 +143,23 @@ def _dwa_one(
                 best_v = v
                 best_w = w
                 best_c = c
+            if v > 0.0:
+                moving = True
+    if turn and not moving and v_lo == 0.0:
+        # a stuck robot with no speed admissible, only turns in place: the asked turn,
+        # clipped into the window, is tried too (``dwa_command``'s ``stuck``)
+        b = da / half
+        lim = vw / half
+        w = min(max(w_ref, max(w0 - b, -lim)), min(w0 + b, lim))
+        c, _ = _evaluate(pose, 0.0, w, obs, rad, radius, horizon, n_steps)
+        score = (
+            -((v_ref / v_max) ** 2) - ((w - w_ref) / w_max) ** 2 + c_weight * min(c, c_cap) / c_cap
+        )
+        if score > best:
+            best = score
+            best_v = 0.0
+            best_w = w
+            best_c = c
     if best == -np.inf:  # nothing admissible: brake as hard as the window allows
         return fb_v, fb_w, fb_c
     return best_v, best_w, best_c
@@ -163,6 +183,7 @@ def _dwa_batch(
     n_steps: int,
     c_cap: float,
     c_weight: float,
+    turn: BoolArray,
 ) -> FloatArray:  # pragma: no cover - compiled
     out = np.empty((pose.shape[0], 3))
     for i in range(pose.shape[0]):
@@ -185,6 +206,7 @@ def _dwa_batch(
             n_steps,
             c_cap,
             c_weight,
+            bool(turn[i]),
         )
         out[i, 0] = v
         out[i, 1] = w

@@ -41,7 +41,38 @@ def test_pruned_search_equals_brute_force(seed: int) -> None:
     obs[rng.random((n, m)) < 0.2] = 1e9  # padding
     rad = np.where(rng.random((n, m)) < 0.3, 0.15, rng.uniform(0.0, 0.18, (n, m)))
     params = DwaParams(n_v=5, n_omega=9, n_steps=8) if seed % 2 else DwaParams()
-    got = _dwa_batch(pose, last, ref, obs, rad, *_args(params, 0.1))
-    want = _dwa_batch_reference(pose, last, ref, obs, rad, *_args(params, 0.1))
+    turn = rng.random(n) < 0.5  # robots flagged stuck: the asked turn in place tried too
+    args = (*_args(params, 0.1), turn)
+    got = _dwa_batch(pose, last, ref, obs, rad, *args)
+    want = _dwa_batch_reference(pose, last, ref, obs, rad, *args)
     np.testing.assert_array_equal(got, want)
     assert np.isfinite(got[:, 2]).all()
+
+
+def test_stuck_with_no_speed_admissible_it_turns_as_asked_in_place() -> None:
+    """A robot by a door's jamb, as traced (apartment seed 3 at 720 s): the jambs' wall
+    cells, two range returns and a teammate behind it; the path follower asks 0.28 m/s
+    and 0.29 rad/s. No speed is admissible (its disc touches the jamb), so the window
+    keeps v = 0. Not flagged stuck, it keeps the grid's turn rate nearest its last,
+    -0.02 rad/s (the grid's rates lie 0.625 rad/s apart: -0.02 and 0.605 score within a
+    hair of each other; it held it for 240 s); flagged stuck, it turns at the asked
+    rate."""
+    from firefleet.control.navigation._dwa import dwa_command
+
+    p = DwaParams(robot_radius_m=0.2, n_v=5, n_omega=9, n_steps=8)  # the mission's window
+    pose = np.array([[4.74037788067119, 9.67678761473593, 2.907046991122833]])
+    # the door's two jambs: the wall cells' centres (discs of half a cell's diagonal)
+    south = [[x, y] for y in np.round(np.arange(8.475, 9.48, 0.05), 3) for x in (4.525, 4.625)]
+    north = [[x, y] for y in np.round(np.arange(10.425, 10.88, 0.05), 3) for x in (4.525, 4.625)]
+    wall = np.array(south + north + [[4.575, 9.475], [4.575, 10.425]])
+    returns = [[4.4926431323246785, 9.524609415437977], [5.313752365268165, 10.028999394358037]]
+    mate = [[5.4930040205840305, 9.917284161038616]]  # a teammate behind it (0.2 m disc)
+    pts = np.vstack([returns, mate, wall])[None]
+    radii = np.r_[0.0, 0.0, 0.2, np.full(len(wall), 0.025 * np.sqrt(2.0))][None]
+    ref = [[0.2769064330158617, 0.29133618810211004]]
+    v, w, c = dwa_command(pose, [[0.0, -0.02]], ref, pts, radii, p, 0.1)
+    assert (v[0], w[0]) == (0.0, pytest.approx(-0.02))
+    assert c[0] < 0.0  # touching
+    v, w, _ = dwa_command(pose, [[0.0, -0.02]], ref, pts, radii, p, 0.1, [True])
+    assert v[0] == 0.0
+    assert w[0] == pytest.approx(ref[0][1])

@@ -6,7 +6,7 @@ Public surface::
     astar(costmap, start_xy_m, goal_xy_m) -> AStarResult
     astar_cells(cost, start, goal, resolution_m)      the bare compiled search
     smooth_path(costmap, xy_m) -> PlanarPath          shortcut + rounded corners
-    dwa_command(pose, last, reference, obstacles, radii, params, dt_s)  the dynamic window
+    dwa_command(pose, last, reference, obstacles, radii, params, dt_s[, stuck])  the dynamic window
 
 The team controller the ``navigate`` task kind calls each tick::
 

@@ -232,6 +232,7 @@ def _dwa_one(
     n_steps: int,
     c_cap: float,
     c_weight: float,
+    turn: bool,
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
     half = axle / 2.0
     v_max = vw
@@ -272,6 +273,7 @@ def _dwa_one(
     fb_v = v_lo
     fb_w = w0
     fb_c = -np.inf
+    moving = False  # an admissible command with v > 0
     for iv in range(n_v + 1):
         if iv < n_v:
             v = v_lo + (v_hi - v_lo) * iv / (n_v - 1)
@@ -308,6 +310,23 @@ def _dwa_one(
                 best_v = v
                 best_w = w
                 best_c = c
+            if v > 0.0:
+                moving = True
+    if turn and not moving and v_lo == 0.0:
+        # a stuck robot with no speed admissible, only turns in place: the asked turn,
+        # clipped into the window, is tried too (``dwa_command``'s ``stuck``)
+        b = da / half
+        lim = vw / half
+        w = min(max(w_ref, max(w0 - b, -lim)), min(w0 + b, lim))
+        c, _ = _evaluate(pose, 0.0, w, obs, rad, reach, radius, horizon, n_steps)
+        score = (
+            -((v_ref / v_max) ** 2) - ((w - w_ref) / w_max) ** 2 + c_weight * min(c, c_cap) / c_cap
+        )
+        if score > best:
+            best = score
+            best_v = 0.0
+            best_w = w
+            best_c = c
     if best == -np.inf:  # nothing admissible: brake as hard as the window allows
         return fb_v, fb_w, fb_c
     return best_v, best_w, best_c
@@ -331,6 +350,7 @@ def _dwa_batch(
     n_steps: int,
     c_cap: float,
     c_weight: float,
+    turn: BoolArray,
 ) -> FloatArray:  # pragma: no cover - compiled
     out = np.empty((pose.shape[0], 3))
     for i in range(pose.shape[0]):
@@ -353,6 +373,7 @@ def _dwa_batch(
             n_steps,
             c_cap,
             c_weight,
+            bool(turn[i]),
         )
         out[i, 0] = v
         out[i, 1] = w
@@ -368,6 +389,7 @@ def dwa_command(
     obstacle_radius_m: ArrayLike,
     params: DwaParams,
     dt_s: float,
+    stuck: ArrayLike | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Safe velocities for a team: each robot's reference bent around its obstacles.
 
@@ -386,6 +408,14 @@ def dwa_command(
     params : DwaParams
     dt_s : float
         The control period [s]: the window is what the wheels reach in it.
+    stuck : array_like of bool, shape (N,), optional
+        Robots that have made no progress for a while (the navigation's stuck
+        detector). One of them for which no speed is admissible, only turns in place,
+        also tries the reference's turn rate clipped into the window: the grid's turn
+        rates lie ``2 a dt / (L (n_omega - 1))`` apart (0.625 rad/s in the mission's
+        window) and may score within a hair of each other, so a robot touching a door's
+        jamb held the one nearest its last turn and never turned towards its path
+        (apartment seed 3: 240 s). Default: none.
 
     Returns
     -------
@@ -421,6 +451,7 @@ def dwa_command(
     if not (math.isfinite(dt_s) and dt_s > 0.0):
         raise InputError(f"dt_s must be > 0, got {dt_s!r}")
     obs = np.where(np.isfinite(obs), obs, 1e9)
+    turn = np.zeros(n, dtype=bool) if stuck is None else np.asarray(stuck, dtype=bool).reshape(n)
     out = _dwa_batch(
         p,
         last,
@@ -438,6 +469,7 @@ def dwa_command(
         params.n_steps,
         params.clearance_cap_m,
         params.clearance_weight,
+        turn,
     )
     return out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy()
 

@@ -438,8 +438,9 @@ def navigation_step(
             axis=1,
         )
         ref = np.stack([v_ref, w_ref], axis=1)[act]
+        # a robot the stuck detector flagged may turn in place as asked (``dwa_command``)
         v[act], w[act], _ = dwa_command(
-            pose[act], state.command[act], ref, obstacles, radii, params.dwa, dt_s
+            pose[act], state.command[act], ref, obstacles, radii, params.dwa, dt_s, stuck[act] > 0
         )
     # robots that stop: brake as hard as the window allows (the window holds 0 after
     # a tenth of a second at most)
