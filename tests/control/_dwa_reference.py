@@ -148,7 +148,7 @@ def _dwa_one(
     if turn and not moving and v_lo == 0.0:
         # a stuck robot with no speed admissible, only turns in place: the asked turn,
         # clipped into the window, is tried too (``dwa_command``'s ``stuck``)
-        b = da / half
+        b = (da - v0) / half  # the window's turn rates at v = 0 (v0 <= da here)
         lim = vw / half
         w = min(max(w_ref, max(w0 - b, -lim)), min(w0 + b, lim))
         c, _ = _evaluate(pose, 0.0, w, obs, rad, radius, horizon, n_steps)

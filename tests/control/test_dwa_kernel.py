@@ -76,3 +76,26 @@ def test_stuck_with_no_speed_admissible_it_turns_as_asked_in_place() -> None:
     v, w, _ = dwa_command(pose, [[0.0, -0.02]], ref, pts, radii, p, 0.1, [True])
     assert v[0] == 0.0
     assert w[0] == pytest.approx(ref[0][1])
+
+
+def test_a_stuck_robots_turn_stays_in_the_window_and_a_bad_flag_is_refused() -> None:
+    """Still rolling (0.1 m/s, below one tick's braking) and flagged stuck, against a
+    wall it touches: the turn in place it is given lies in the dynamic window (at v = 0
+    the turn rates reach (a dt - v0) / (L / 2) from the last, not a dt / (L / 2)); a
+    flag of the wrong shape is one clear error naming it."""
+    from firefleet.control.navigation._dwa import dwa_command, in_window
+    from firefleet.errors import InputError
+
+    p = DwaParams(robot_radius_m=0.2, n_v=5, n_omega=9, n_steps=8)
+    pose = np.array([[0.0, 0.0, 0.0]])
+    wall = np.array([[[0.22, y] for y in np.arange(-0.5, 0.55, 0.05)]])  # touching, ahead
+    radii = np.full(wall.shape[:2], 0.025 * np.sqrt(2.0))
+    last = np.array([[0.1, 0.0]])
+    ref = np.array([[0.3, 3.0]])  # asks a hard left turn
+    v, w, _ = dwa_command(pose, last, ref, wall, radii, p, 0.1, [True])
+    assert v[0] == 0.0
+    limit = (p.wheel_accel_m_s2 * 0.1 - 0.1) / (p.axle_length_m / 2.0)
+    assert w[0] == pytest.approx(limit)
+    assert in_window(np.c_[v, w], last, p, 0.1).all()
+    with pytest.raises(InputError, match="stuck"):
+        dwa_command(pose, last, ref, wall, radii, p, 0.1, [True, False])

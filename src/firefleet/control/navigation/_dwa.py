@@ -315,7 +315,7 @@ def _dwa_one(
     if turn and not moving and v_lo == 0.0:
         # a stuck robot with no speed admissible, only turns in place: the asked turn,
         # clipped into the window, is tried too (``dwa_command``'s ``stuck``)
-        b = da / half
+        b = (da - v0) / half  # the window's turn rates at v = 0 (v0 <= da here)
         lim = vw / half
         w = min(max(w_ref, max(w0 - b, -lim)), min(w0 + b, lim))
         c, _ = _evaluate(pose, 0.0, w, obs, rad, reach, radius, horizon, n_steps)
@@ -412,7 +412,7 @@ def dwa_command(
         Robots that have made no progress for a while (the navigation's stuck
         detector). One of them for which no speed is admissible, only turns in place,
         also tries the reference's turn rate clipped into the window: the grid's turn
-        rates lie ``2 a dt / (L (n_omega - 1))`` apart (0.625 rad/s in the mission's
+        rates lie ``4 a dt / (L (n_omega - 1))`` apart (0.625 rad/s in the mission's
         window) and may score within a hair of each other, so a robot touching a door's
         jamb held the one nearest its last turn and never turned towards its path
         (apartment seed 3: 240 s). Default: none.
@@ -451,7 +451,9 @@ def dwa_command(
     if not (math.isfinite(dt_s) and dt_s > 0.0):
         raise InputError(f"dt_s must be > 0, got {dt_s!r}")
     obs = np.where(np.isfinite(obs), obs, 1e9)
-    turn = np.zeros(n, dtype=bool) if stuck is None else np.asarray(stuck, dtype=bool).reshape(n)
+    turn = np.zeros(n, dtype=bool) if stuck is None else np.asarray(stuck, dtype=bool)
+    if turn.shape != (n,):
+        raise InputError(f"stuck must be (N,) with N = {n}, got shape {turn.shape}")
     out = _dwa_batch(
         p,
         last,
