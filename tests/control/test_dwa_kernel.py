@@ -13,6 +13,9 @@ from firefleet.control.navigation._dwa import DwaParams, _dwa_batch
 
 from ._dwa_reference import _dwa_batch as _dwa_batch_reference
 
+MISSION_WINDOW = DwaParams(robot_radius_m=0.2, n_v=5, n_omega=9, n_steps=8)
+"""The mission's dynamic window (the robot's 0.15 m radius plus the 0.05 m margin)."""
+
 
 def _args(params: DwaParams, dt_s: float) -> tuple[Any, ...]:
     return (
@@ -59,7 +62,7 @@ def test_stuck_with_no_speed_admissible_it_turns_as_asked_in_place() -> None:
     rate."""
     from firefleet.control.navigation._dwa import dwa_command
 
-    p = DwaParams(robot_radius_m=0.2, n_v=5, n_omega=9, n_steps=8)  # the mission's window
+    p = MISSION_WINDOW
     pose = np.array([[4.74037788067119, 9.67678761473593, 2.907046991122833]])
     # the door's two jambs: the wall cells' centres (discs of half a cell's diagonal)
     south = [[x, y] for y in np.round(np.arange(8.475, 9.48, 0.05), 3) for x in (4.525, 4.625)]
@@ -86,7 +89,7 @@ def test_a_stuck_robots_turn_stays_in_the_window_and_a_bad_flag_is_refused() -> 
     from firefleet.control.navigation._dwa import dwa_command, in_window
     from firefleet.errors import InputError
 
-    p = DwaParams(robot_radius_m=0.2, n_v=5, n_omega=9, n_steps=8)
+    p = MISSION_WINDOW
     pose = np.array([[0.0, 0.0, 0.0]])
     wall = np.array([[[0.22, y] for y in np.arange(-0.5, 0.55, 0.05)]])  # touching, ahead
     radii = np.full(wall.shape[:2], 0.025 * np.sqrt(2.0))

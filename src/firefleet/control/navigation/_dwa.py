@@ -213,6 +213,27 @@ def _evaluate(
 
 
 @numba.njit(cache=True)
+def _score(
+    v: float,
+    w: float,
+    c: float,
+    v_ref: float,
+    w_ref: float,
+    v_max: float,
+    w_max: float,
+    c_cap: float,
+    c_weight: float,
+) -> float:  # pragma: no cover - compiled
+    """An admissible candidate's score: nearness to the reference, and its clearance
+    ``c`` [m] up to ``c_cap``."""
+    return float(
+        -(((v - v_ref) / v_max) ** 2)
+        - ((w - w_ref) / w_max) ** 2
+        + c_weight * min(c, c_cap) / c_cap
+    )
+
+
+@numba.njit(cache=True)
 def _dwa_one(
     pose: FloatArray,
     v0: float,
@@ -300,11 +321,7 @@ def _dwa_one(
                     fb_w = w
                     fb_c = c
                 continue
-            score = (
-                -(((v - v_ref) / v_max) ** 2)
-                - ((w - w_ref) / w_max) ** 2
-                + c_weight * min(c, c_cap) / c_cap
-            )
+            score = _score(v, w, c, v_ref, w_ref, v_max, w_max, c_cap, c_weight)
             if score > best:
                 best = score
                 best_v = v
@@ -319,9 +336,7 @@ def _dwa_one(
         lim = vw / half
         w = min(max(w_ref, max(w0 - b, -lim)), min(w0 + b, lim))
         c, _ = _evaluate(pose, 0.0, w, obs, rad, reach, radius, horizon, n_steps)
-        score = (
-            -((v_ref / v_max) ** 2) - ((w - w_ref) / w_max) ** 2 + c_weight * min(c, c_cap) / c_cap
-        )
+        score = _score(0.0, w, c, v_ref, w_ref, v_max, w_max, c_cap, c_weight)
         if score > best:
             best = score
             best_v = 0.0
