@@ -365,6 +365,25 @@ class TacticsParams:
         """The refill points [m], shape (P, 2) (``None``: the start poses' centroid)."""
         return None if self.refill_xy_m is None else refill_points(self.refill_xy_m)
 
+    def refill_points_of(self, poses_m: FloatArray) -> FloatArray:
+        """The refill points [m] (P, 2) of a team starting at ``poses_m`` (N, 3):
+        ``refill_xy_m``, else the start poses' centroid (one point). The team fills its
+        tanks there, and the world (``sim.kinds.mission``) takes the same points.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> TacticsParams().refill_points_of(np.array([[1.0, 2.0, 0.0], [3.0, 4.0, 1.0]]))
+        array([[2., 3.]])
+        >>> TacticsParams(refill_xy_m=(5.0, 6.0)).refill_points_of(np.zeros((2, 3)))
+        array([[5., 6.]])
+        """
+        points = self.refill_points_m
+        if points is not None:
+            return points
+        out: FloatArray = np.asarray(poses_m, dtype=float)[:, :2].mean(axis=0)[None]
+        return out
+
 
 def refill_points(xy_m: object) -> FloatArray:
     """One point (x, y) or a sequence of them as an array (P, 2) [m], P >= 1, finite.

@@ -238,14 +238,11 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         raise InputError(f"poses[{i}] = {p[i, :2].tolist()} lies off the map {grid.name!r}")
     nav = navigation_init(grid, p, p[:, :2], params.nav)
     cm = coarse_map(nav.costmap, params.plan_cell_m)
-    points = params.refill_points_m
-    if points is not None:
-        off_map = ~grid.contains(points)
-        if off_map.any():
-            bad = points[int(np.flatnonzero(off_map)[0])].tolist()
-            raise InputError(f"tactics.refill_xy_m: {bad} lies off the map {grid.name!r}")
-    else:
-        points = p[:, :2].mean(axis=0)[None]
+    points = params.refill_points_of(p)
+    off_map = ~grid.contains(points)
+    if off_map.any():  # given points only: the poses' centroid lies on the map with them
+        bad = points[int(np.flatnonzero(off_map)[0])].tolist()
+        raise InputError(f"tactics.refill_xy_m: {bad} lies off the map {grid.name!r}")
     gap = 2.0 * params.nav.robot_radius_m + params.nav.margin_m + 0.15
     per_point = [_refill_spots(cm, point, params.refill_radius_m, gap) for point in points]
     spots = np.concatenate(per_point)

@@ -183,16 +183,17 @@ def mission_world(scenario: Scenario) -> MissionWorld:
 
 
 def _refill_points(scenario: Scenario) -> FloatArray | None:
-    """The refill points (P, 2) [m] the world fills tanks at: ``command.refill_m``, else
-    the start poses' centroid (as the team takes it); None without robots."""
-    points = _command(scenario).refill_points_m
-    if points:
-        return np.asarray(points, dtype=float).reshape(-1, 2)
+    """The refill points (P, 2) [m] the world fills tanks at: the team's
+    (``TacticsParams.refill_points_of``: ``command.refill_m``, else the start poses'
+    centroid); None without robots."""
+    from firefleet.control.mission import TacticsParams
+
     poses = np.asarray(scenario.poses, dtype=float).reshape(-1, 3)
     if len(poses) == 0:
         return None
-    out: FloatArray = poses[:, :2].mean(axis=0)[None]
-    return out
+    return TacticsParams(refill_xy_m=_command(scenario).refill_points_m or None).refill_points_of(
+        poses
+    )
 
 
 def _range_sensors(
