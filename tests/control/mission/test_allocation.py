@@ -96,10 +96,11 @@ def test_exclusive_frontiers_are_never_shared(seed: int) -> None:
     assert (got >= 0).sum() == min(r, f - len(taken))
 
 
-@pytest.mark.parametrize("n_work", [3, 6, 20, 50])
+@pytest.mark.parametrize("n_work", [0, 1, 2, 3, 6, 20, 50])
 def test_fire_demands_leave_explorers(n_work: int) -> None:
     """Demands cut against a brute force: of every way to give the fires at most what
-    they ask (at least fire_robots_min each, or one when the team is too small), the
+    they ask (at least fire_robots_min each, or one each when the team is too small, or
+    none when the robots at hand are all explorers and others are out refilling), the
     largest total within n_work - ceil(0.3 n_work) - victims, most even (the largest
     demand as small as it can be)."""
 
@@ -109,10 +110,17 @@ def test_fire_demands_leave_explorers(n_work: int) -> None:
         f = int(rng.integers(1, 4))
         need = rng.integers(2, 7, f)
         victims = int(rng.integers(0, 4))
-        out = cut_demand(need, victims, n_work, p)
+        refilling = int(rng.integers(0, 3))
+        out = cut_demand(need, victims, n_work, p, refilling)
         explorers = math.ceil(0.3 * n_work)
-        low = 2 if f * 2 <= n_work - explorers else 1
-        budget = max(n_work - explorers - victims, f * low)
+        spare = n_work - explorers
+        if f * 2 <= spare:
+            low = 2
+        elif spare <= 0 and refilling:
+            low = 0
+        else:
+            low = 1
+        budget = max(spare - victims, f * low)
         best = None
         for combo in itertools.product(*[range(low, int(k) + 1) for k in need]):
             c = np.array(combo)
@@ -126,3 +134,53 @@ def test_fire_demands_leave_explorers(n_work: int) -> None:
         assert np.all(out <= need)
         if n_work >= 20:
             assert n_work - out.sum() - victims >= explorers
+
+
+@pytest.mark.parametrize("refilling", [0, 2])
+def test_plan_keeps_the_explorer_while_the_fighters_refill(refilling: int) -> None:
+    """The plan (``_step._plan``): three robots, one fire, floor left to search, the
+    third robot exploring. With both others out refilling (the school, seed 4, at
+    180 s) it explores on: they come back to the fire. With both others lost, it is the
+    team and it fights (the fire keeps one robot)."""
+    from dataclasses import replace
+
+    from firefleet.control.mission import TacticsObservation, tactics_init, tactics_step
+    from firefleet.control.mission._knowledge import fires_of
+    from firefleet.control.mission._params import EXPLORE, FIGHT, REFILL
+    from firefleet.control.mission._step import _plan
+    from firefleet.world import load_map
+
+    p = TacticsParams(fire_robots_min=2, fire_robots_max=2)
+    pose = np.array([[1.0, 5.0, 0.0], [1.5, 4.6, 0.0], [1.0, 4.2, 0.0]])
+    state = tactics_init(load_map("office"), pose, p)
+    fire = np.array([[4.0, 5.0], [4.5, 5.0]])
+    obs = TacticsObservation(
+        t_s=0.0,
+        pose_m=pose,
+        fire_xy_m=fire,
+        fire_robot=np.zeros(2, int),
+        person_xy_m=np.zeros((0, 2)),
+        person_robot=np.zeros(0, int),
+        ranges={},
+        tank_l=np.full(3, 20.0),
+        damaged=np.zeros(3, bool),
+        alive=np.ones(3, bool),
+    )
+    state, _ = tactics_step(state, obs, p, 0.01)
+    ids, _, _ = fires_of(state.knowledge)
+    assert len(ids) == 1
+    assert state.covered_coarse.sum() < 0.5 * state.coarse.floor.sum()  # floor to search
+    working = np.array([True, True, True]) if refilling else np.array([False, False, True])
+    state = replace(
+        state,
+        mode=np.array([REFILL, REFILL, EXPLORE], dtype=state.mode.dtype),
+        task_fire=np.full(3, -1),
+        refill_spot=np.array([0, 1, -1]),
+    )
+    new = _plan(state, pose, np.array([0.5, 0.5, 20.0]), working, p)
+    if refilling:
+        assert new.task_fire.tolist() == [-1, -1, -1]
+        assert new.mode[2] == EXPLORE
+    else:
+        assert new.task_fire.tolist()[2] == ids[0]
+        assert new.mode[2] == FIGHT

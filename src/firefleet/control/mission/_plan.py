@@ -47,13 +47,21 @@ def fire_demand(extent_m: FloatArray, params: TacticsParams) -> IntArray:
     return out
 
 
-def cut_demand(need: IntArray, n_victims: int, n_work: int, params: TacticsParams) -> IntArray:
+def cut_demand(
+    need: IntArray, n_victims: int, n_work: int, params: TacticsParams, refilling: int = 0
+) -> IntArray:
     """The fires' demands (F,) cut so that ``explore_frac`` of the ``n_work`` working
-    robots (rounded up) stay free to explore while floor is left to search.
+    robots at hand (rounded up) stay free to explore while floor is left to search.
 
     The open victims (one robot each) count against the same budget; the fires keep
-    ``fire_robots_min`` each at least (one each when the team is smaller than that).
+    ``fire_robots_min`` each at least, or one each when the team is smaller than that,
+    but none while the robots at hand are all explorers and others (``refilling``) are
+    out at a refill point: those come back to the fires, and the explorers search on.
     The largest demand is cut first (no crowding at one fire).
+
+    Without the refillers' exception, a team of three whose two fighters went to refill
+    sent its explorer to the fire (the school, seed 4, at 180 s: it left the rooms it had
+    not looked into, and the people there were never found).
 
     Examples
     --------
@@ -66,13 +74,18 @@ def cut_demand(need: IntArray, n_victims: int, n_work: int, params: TacticsParam
     [4, 4, 5, 5]
     >>> cut_demand(np.array([2]), 1, 3, p).tolist()  # 3 robots: the fire keeps its 2
     [2]
+    >>> cut_demand(np.array([2]), 0, 1, p).tolist()  # one robot: it fights
+    [1]
+    >>> cut_demand(np.array([2]), 0, 1, p, refilling=2).tolist()  # 2 out: it explores
+    [0]
     """
     out = np.array(need, dtype=np.int64)
     n_fires = len(out)
-    budget = n_work - math.ceil(params.explore_frac * n_work) - n_victims
+    spare = n_work - math.ceil(params.explore_frac * n_work)
+    budget = spare - n_victims
     floor = n_fires * params.fire_robots_min
-    if floor > n_work - math.ceil(params.explore_frac * n_work):
-        floor = n_fires
+    if floor > spare:
+        floor = 0 if spare <= 0 and refilling > 0 else n_fires
     budget = max(budget, floor)
     while out.sum() > budget:
         out[int(np.argmax(out))] -= 1

@@ -121,7 +121,8 @@ def _plan(
     if (cm.floor & ~state.covered_coarse).sum() > 0.02 * floor and n_fires:
         # floor left to search: keep explore_frac of the team exploring
         n_work = int((working & (state.mode != REFILL)).sum())
-        need = cut_demand(need, len(open_v), n_work, params)
+        refilling = int((working & (state.mode == REFILL)).sum())
+        need = cut_demand(need, len(open_v), n_work, params, refilling)
     if params.spare_fight:  # robots with nothing left to search join the fires (_spare)
         spare = working & (state.mode == IDLE) & (tank > 0.05 * params.tank_l)
         need = spare_demand(need, fext, ids, state.task_fire, spare, params)
