@@ -58,6 +58,24 @@ def seen(
     return r[ok], p[ok]
 
 
+def fire_obs(pose: np.ndarray, fire_xy: np.ndarray, t_s: float = 0.0) -> TacticsObservation:
+    """The observation of a team at ``pose`` (N, 3) whose robot 0 sees flames at
+    ``fire_xy`` (K, 2), no person, every tank full (20 L), nobody damaged."""
+    n = len(pose)
+    return TacticsObservation(
+        t_s=t_s,
+        pose_m=pose,
+        fire_xy_m=fire_xy,
+        fire_robot=np.zeros(len(fire_xy), int),
+        person_xy_m=np.zeros((0, 2)),
+        person_robot=np.zeros(0, int),
+        ranges={},
+        tank_l=np.full(n, 20.0),
+        damaged=np.zeros(n, bool),
+        alive=np.ones(n, bool),
+    )
+
+
 @dataclass
 class World:
     """The harness's truth and the team."""

@@ -129,29 +129,18 @@ def test_plan_sends_the_idle_robot_only_when_on(on: bool) -> None:
     it, it stays idle (``fire_robots_max`` 2)."""
     from dataclasses import replace
 
-    from firefleet.control.mission import TacticsObservation, tactics_init, tactics_step
+    from firefleet.control.mission import tactics_init, tactics_step
     from firefleet.control.mission._knowledge import fires_of
     from firefleet.control.mission._params import FIGHT, IDLE
     from firefleet.control.mission._step import _plan
     from firefleet.world import load_map
+    from tests.control.mission._harness import fire_obs
 
     p = TacticsParams(fire_robots_max=2, fire_robots_min=2, spare_fight=on)
     pose = np.array([[1.0, 5.0, 0.0], [1.5, 4.6, 0.0], [1.0, 4.2, 0.0]])
     state = tactics_init(load_map("office"), pose, p)
     fire = np.array([[4.0, 5.0], [4.7, 5.0], [5.4, 5.0], [6.1, 5.0]])
-    obs = TacticsObservation(
-        t_s=0.0,
-        pose_m=pose,
-        fire_xy_m=fire,
-        fire_robot=np.zeros(4, int),
-        person_xy_m=np.zeros((0, 2)),
-        person_robot=np.zeros(0, int),
-        ranges={},
-        tank_l=np.full(3, 20.0),
-        damaged=np.zeros(3, bool),
-        alive=np.ones(3, bool),
-    )
-    state, _ = tactics_step(state, obs, p, 0.01)
+    state, _ = tactics_step(state, fire_obs(pose, fire), p, 0.01)
     ids, _, ext = fires_of(state.knowledge)
     assert len(ids) == 1
     assert 1.0 <= ext[0] < 2.0
