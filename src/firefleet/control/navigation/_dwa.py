@@ -333,8 +333,7 @@ def _dwa_one(
         # a stuck robot with no speed admissible, only turns in place: the asked turn,
         # clipped into the window, is tried too (``dwa_command``'s ``stuck``)
         b = (da - v0) / half  # the window's turn rates at v = 0 (v0 <= da here)
-        lim = vw / half
-        w = min(max(w_ref, max(w0 - b, -lim)), min(w0 + b, lim))
+        w = min(max(w_ref, max(w0 - b, -w_max)), min(w0 + b, w_max))
         c, _ = _evaluate(pose, 0.0, w, obs, rad, reach, radius, horizon, n_steps)
         score = _score(0.0, w, c, v_ref, w_ref, v_max, w_max, c_cap, c_weight)
         if score > best:
