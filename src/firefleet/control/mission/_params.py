@@ -14,7 +14,14 @@ from firefleet.control.navigation import NavigationParams
 from firefleet.errors import InputError, check_fields
 from firefleet.world import SprayParams
 
-__all__ = ["MODES", "Orders", "TacticsObservation", "TacticsParams", "refill_points"]
+__all__ = [
+    "MODES",
+    "Orders",
+    "TacticsObservation",
+    "TacticsParams",
+    "refill_points",
+    "team_refill_points",
+]
 
 MODES = ("explore", "confirm", "fight", "refill", "idle", "damaged")
 """What a robot is doing (``Orders.mode`` holds the index in this tuple)."""
@@ -360,30 +367,6 @@ class TacticsParams:
         if self.refill_xy_m is not None:
             refill_points(self.refill_xy_m)
 
-    @property
-    def refill_points_m(self) -> FloatArray | None:
-        """The refill points [m], shape (P, 2) (``None``: the start poses' centroid)."""
-        return None if self.refill_xy_m is None else refill_points(self.refill_xy_m)
-
-    def refill_points_of(self, poses_m: FloatArray) -> FloatArray:
-        """The refill points [m] (P, 2) of a team starting at ``poses_m`` (N, 3):
-        ``refill_xy_m``, else the start poses' centroid (one point). The team fills its
-        tanks there, and the world (``sim.kinds.mission``) takes the same points.
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> TacticsParams().refill_points_of(np.array([[1.0, 2.0, 0.0], [3.0, 4.0, 1.0]]))
-        array([[2., 3.]])
-        >>> TacticsParams(refill_xy_m=(5.0, 6.0)).refill_points_of(np.zeros((2, 3)))
-        array([[5., 6.]])
-        """
-        points = self.refill_points_m
-        if points is not None:
-            return points
-        out: FloatArray = np.asarray(poses_m, dtype=float)[:, :2].mean(axis=0)[None]
-        return out
-
 
 def refill_points(xy_m: object) -> FloatArray:
     """One point (x, y) or a sequence of them as an array (P, 2) [m], P >= 1, finite.
@@ -404,6 +387,26 @@ def refill_points(xy_m: object) -> FloatArray:
             f"tactics.refill_xy_m must be a finite (x, y) or a list of them, got {xy_m}"
         )
     return a
+
+
+def team_refill_points(xy_m: object | None, poses_m: FloatArray) -> FloatArray:
+    """The refill points [m] (P, 2) of a team starting at ``poses_m`` (N, 3): ``xy_m``
+    (:func:`refill_points`; ``TacticsParams.refill_xy_m``), else the start poses'
+    centroid (one point). The team fills its tanks there (``tactics_init``), and the
+    world takes the same points (``sim.kinds.mission``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> team_refill_points(None, np.array([[1.0, 2.0, 0.0], [3.0, 4.0, 1.0]]))
+    array([[2., 3.]])
+    >>> team_refill_points((5.0, 6.0), np.zeros((2, 3)))
+    array([[5., 6.]])
+    """
+    if xy_m is not None:
+        return refill_points(xy_m)
+    out: FloatArray = np.asarray(poses_m, dtype=float)[:, :2].mean(axis=0)[None]
+    return out
 
 
 @dataclass(frozen=True, eq=False)

@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike
 from firefleet._typing import BoolArray, FloatArray, IntArray
 from firefleet.control.mission._coverage import CoarseMap, coarse_map
 from firefleet.control.mission._knowledge import Knowledge, empty_knowledge, fires_of
-from firefleet.control.mission._params import EXPLORE, Orders, TacticsParams
+from firefleet.control.mission._params import EXPLORE, Orders, TacticsParams, team_refill_points
 from firefleet.control.navigation import Costmap, NavigationState, navigation_init
 from firefleet.errors import InputError, as_float_array
 from firefleet.world import OccupancyGrid
@@ -238,7 +238,7 @@ def tactics_init(grid: OccupancyGrid, poses: ArrayLike, params: TacticsParams) -
         raise InputError(f"poses[{i}] = {p[i, :2].tolist()} lies off the map {grid.name!r}")
     nav = navigation_init(grid, p, p[:, :2], params.nav)
     cm = coarse_map(nav.costmap, params.plan_cell_m)
-    points = params.refill_points_of(p)
+    points = team_refill_points(params.refill_xy_m, p)
     off_map = ~grid.contains(points)
     if off_map.any():  # given points only: the poses' centroid lies on the map with them
         bad = points[int(np.flatnonzero(off_map)[0])].tolist()

@@ -184,16 +184,14 @@ def mission_world(scenario: Scenario) -> MissionWorld:
 
 def _refill_points(scenario: Scenario) -> FloatArray | None:
     """The refill points (P, 2) [m] the world fills tanks at: the team's
-    (``TacticsParams.refill_points_of``: ``command.refill_m``, else the start poses'
-    centroid); None without robots."""
-    from firefleet.control.mission import TacticsParams
+    (``team_refill_points``: ``command.refill_m``, else the start poses' centroid); None
+    without robots."""
+    from firefleet.control.mission._params import team_refill_points
 
     poses = np.asarray(scenario.poses, dtype=float).reshape(-1, 3)
     if len(poses) == 0:
         return None
-    return TacticsParams(refill_xy_m=_command(scenario).refill_points_m or None).refill_points_of(
-        poses
-    )
+    return team_refill_points(_command(scenario).refill_points_m or None, poses)
 
 
 def _range_sensors(
